@@ -1,0 +1,106 @@
+#include "common.h"
+
+#include <lodkit/error.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fmt/format.h>
+#include <iostream>
+#include <iterator>
+
+namespace lodkit::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+MeshFormat stream_format(const std::optional<std::string>& format, const char* stream) {
+  if (!format)
+    throw Error(fmt::format("{}: give the format with --format (obj, ply, off, stl, drc)", stream));
+  if (auto f = parse_format(*format)) return *f;
+  throw Error(fmt::format("{}: unknown format '{}'", stream, *format));
+}
+
+}  // namespace
+
+Mesh read_input(const std::string& path, const std::optional<std::string>& format,
+                const ReadOptions& options) {
+  if (path == "-") {
+    const std::string bytes{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
+    return read_mesh_from_memory(bytes, stream_format(format, "<stdin>"), "<stdin>", options);
+  }
+  ReadOptions with_format = options;
+  if (format) with_format.format = stream_format(format, path.c_str());
+  return read_mesh(path, with_format);
+}
+
+void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,
+                  const WriteOptions& options, const std::string& input) {
+  if (path == "-") {
+    const std::string bytes = write_mesh_to_memory(mesh, stream_format(format, "<stdout>"), options);
+    std::fwrite(bytes.data(), 1, bytes.size(), stdout);
+    std::fflush(stdout);
+    return;
+  }
+  std::error_code ec;
+  if (!input.empty() && input != "-" && fs::exists(path, ec) && fs::equivalent(path, input, ec))
+    throw Error(fmt::format("{}: refusing to overwrite the input file; choose another output path", path));
+  WriteOptions with_format = options;
+  if (format) with_format.format = stream_format(format, path.c_str());
+  write_mesh(mesh, path, with_format);
+}
+
+std::string thousands(long long n) {
+  std::string digits = std::to_string(n < 0 ? -n : n), out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out.push_back(',');
+    out.push_back(digits[i]);
+  }
+  return n < 0 ? "-" + out : out;
+}
+
+nlohmann::json to_json(const MeshReport& r) {
+  using nlohmann::json;
+  json j;
+  j["vertices"] = r.vertices;
+  j["faces"] = r.faces;
+  j["welded_vertices"] = r.welded_vertices;
+  j["duplicate_positions"] = r.duplicate_positions;
+  j["unreferenced_vertices"] = r.unreferenced_vertices;
+  j["edges"] = r.edges;
+  if (r.bounds.isEmpty()) {
+    j["bounds"] = nullptr;
+  } else {
+    j["bounds"] = {{"min", {r.bounds.min().x(), r.bounds.min().y(), r.bounds.min().z()}},
+                   {"max", {r.bounds.max().x(), r.bounds.max().y(), r.bounds.max().z()}}};
+  }
+  j["diagonal"] = r.diagonal;
+  j["components"] = r.components;
+  j["boundary_edges"] = r.boundary_edges;
+  j["boundary_loops"] = r.boundary_loops;
+  j["non_manifold_edges"] = r.non_manifold_edges;
+  j["non_manifold_vertices"] = r.non_manifold_vertices;
+  j["inconsistently_oriented_edges"] = r.inconsistently_oriented_edges;
+  j["degenerate_faces"] = r.degenerate_faces;
+  j["duplicate_faces"] = r.duplicate_faces;
+  j["manifold"] = r.manifold;
+  j["oriented"] = r.oriented;
+  j["closed"] = r.closed;
+  j["euler_characteristic"] = r.euler_characteristic;
+  j["genus"] = r.genus ? json(*r.genus) : json(nullptr);
+  j["area"] = r.area;
+  j["volume"] = r.volume ? json(*r.volume) : json(nullptr);
+  j["attributes"] = {{"normals", r.has_normals}, {"uvs", r.has_uvs}, {"colours", r.has_colours},
+                     {"face_colours", r.has_face_colours}};
+  return j;
+}
+
+CLI::Validator format_validator() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        return parse_format(s) ? std::string() : "unknown format '" + s + "' (obj, ply, off, stl, drc)";
+      },
+      "FORMAT");
+}
+
+}  // namespace lodkit::cli

@@ -1,0 +1,47 @@
+#pragma once
+// What every subcommand shares: reading and writing meshes by path or "-" (stdin/stdout), the
+// summary lines on stderr, and the subcommand registry.
+#include <lodkit/inspect.h>
+#include <lodkit/io.h>
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lodkit::cli {
+
+/// A registered subcommand: its CLI11 app and the function that runs it (returns the exit code).
+struct Command {
+  CLI::App* app;
+  std::function<int()> run;
+};
+
+struct GlobalOptions {
+  bool quiet = false;
+};
+
+Command add_info_command(CLI::App& app, const GlobalOptions& global);
+Command add_convert_command(CLI::App& app, const GlobalOptions& global);
+Command add_generate_command(CLI::App& app, const GlobalOptions& global);
+
+/// Reads `path`, or stdin when it is "-" (then `format` names the format).
+Mesh read_input(const std::string& path, const std::optional<std::string>& format,
+                const ReadOptions& options = {});
+
+/// Writes to `path` atomically, or to stdout when it is "-" (then `format` names the format).
+/// Refuses to write over `input` (the same file under any name) unless it is empty.
+void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,
+                  const WriteOptions& options, const std::string& input = {});
+
+/// "12,345"
+std::string thousands(long long n);
+
+nlohmann::json to_json(const MeshReport& report);
+
+/// CLI11 validator for names of mesh formats.
+CLI::Validator format_validator();
+
+}  // namespace lodkit::cli

@@ -1,0 +1,50 @@
+// lodkit: one binary, one subcommand per job. main() only parses, dispatches and turns errors into
+// exit codes: 0 success, 1 a lodkit::Error (bad input, failed write), 2 a usage error.
+#include <lodkit/error.h>
+#include <lodkit/version.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <fmt/format.h>
+#include <new>
+
+#include "common.h"
+
+int main(int argc, char** argv) {
+  using namespace lodkit::cli;
+  CLI::App app{"lodkit " LODKIT_VERSION_STRING
+               ": mesh processing and level of detail (inspect, convert, generate)",
+               "lodkit"};
+  app.set_version_flag("--version", LODKIT_VERSION_STRING);
+  app.require_subcommand(1);
+  app.fallthrough();
+  GlobalOptions global;
+  app.add_flag("-q,--quiet", global.quiet, "No summary or progress on stderr");
+  app.footer(R"(Examples:
+  lodkit generate torus -o torus.ply --tolerance 0.001
+  lodkit info torus.ply --json
+  lodkit convert torus.ply torus.drc --quantize 14
+Run 'lodkit <command> --help' for a command's options. Docs: docs/commands/.)");
+
+  std::vector<Command> commands{add_info_command(app, global), add_convert_command(app, global),
+                                add_generate_command(app, global)};
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+  try {
+    for (const Command& c : commands)
+      if (c.app->parsed()) return c.run();
+    return 2;
+  } catch (const lodkit::Error& e) {
+    std::fprintf(stderr, "lodkit: error: %s\n", e.what());
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "lodkit: error: out of memory\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lodkit: error: %s\n", e.what());
+  }
+  return 1;
+}

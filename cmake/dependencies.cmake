@@ -1,0 +1,10 @@
+# Every dependency comes from a Debian 12 package (scripts/install-deps.sh installs them).
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)  # NO_MODULE: CGAL ships a FindEigen3 that would shadow the target
+find_package(fmt REQUIRED)
+find_package(draco REQUIRED)
+find_package(TBB REQUIRED)
+find_package(Threads REQUIRED)
+if(LODKIT_BUILD_CLI)
+  find_package(CLI11 REQUIRED)
+  find_package(nlohmann_json 3 REQUIRED)
+endif()

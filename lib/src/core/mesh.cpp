@@ -1,0 +1,164 @@
+#include <lodkit/error.h>
+#include <lodkit/mesh.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <numeric>
+#include <unordered_map>
+#include <vector>
+
+#include "core/hash.h"
+
+namespace lodkit {
+namespace {
+
+template <typename Matrix>
+void check_rows(const Matrix& m, Index expected, const char* what, const char* per,
+                const std::string& context) {
+  if (m.rows() != 0 && m.rows() != expected)
+    throw Error(fmt::format("{}: {} has {} rows but the mesh has {} {}", context, what, m.rows(),
+                            expected, per));
+}
+
+template <typename Matrix>
+void check_finite(const Matrix& m, const char* what, const std::string& context) {
+  for (Eigen::Index r = 0; r < m.rows(); ++r)
+    for (Eigen::Index c = 0; c < m.cols(); ++c)
+      if (!std::isfinite(static_cast<double>(m(r, c))))
+        throw Error(fmt::format("{}: {} {} is not finite ({})", context, what, r,
+                                static_cast<double>(m(r, c))));
+}
+
+}  // namespace
+
+void validate(const Mesh& mesh, const std::string& context) {
+  const Index n = mesh.num_vertices();
+  check_finite(mesh.positions, "vertex", context);
+  for (Index f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Index v = mesh.triangles(f, k);
+      if (v < 0 || v >= n)
+        throw Error(fmt::format("{}: face {} refers to vertex {} but there are {} vertices", context,
+                                f, v, n));
+    }
+  const Attributes& a = mesh.attributes;
+  check_rows(a.normals, n, "the normal array", "vertices", context);
+  check_rows(a.uvs, n, "the UV array", "vertices", context);
+  check_rows(a.colours, n, "the colour array", "vertices", context);
+  check_rows(a.face_colours, mesh.num_faces(), "the face colour array", "faces", context);
+  check_finite(a.normals, "normal", context);
+  check_finite(a.uvs, "UV", context);
+  check_finite(a.colours, "colour", context);
+  check_finite(a.face_colours, "face colour", context);
+}
+
+Eigen::AlignedBox3d bounding_box(const Mesh& mesh) {
+  Eigen::AlignedBox3d box;
+  for (Index v = 0; v < mesh.num_vertices(); ++v) box.extend(mesh.positions.row(v).transpose());
+  return box;
+}
+
+Eigen::VectorX<Index> position_classes(const Mesh& mesh) {
+  const Index n = mesh.num_vertices();
+  Eigen::VectorX<Index> cls(n);
+  std::unordered_map<detail::PositionKey, Index, detail::PositionKeyHash> first;
+  first.reserve(static_cast<std::size_t>(n));
+  for (Index v = 0; v < n; ++v) {
+    const auto p = mesh.positions.row(v);
+    cls[v] = first.try_emplace(detail::position_key(p[0], p[1], p[2]), v).first->second;
+  }
+  return cls;
+}
+
+namespace {
+
+// Applies a vertex remap (old -> new, -1 = dropped) to every per-vertex array and the triangles.
+void remap_vertices(Mesh& mesh, const std::vector<Index>& new_of_old, Index new_count) {
+  auto compact = [&](auto& matrix) {
+    if (matrix.rows() == 0) return;
+    std::remove_reference_t<decltype(matrix)> out(new_count, matrix.cols());
+    for (Index v = 0; v < static_cast<Index>(new_of_old.size()); ++v)
+      if (new_of_old[v] >= 0) out.row(new_of_old[v]) = matrix.row(v);
+    matrix = std::move(out);
+  };
+  compact(mesh.positions);
+  compact(mesh.attributes.normals);
+  compact(mesh.attributes.uvs);
+  compact(mesh.attributes.colours);
+  for (Index f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) mesh.triangles(f, k) = new_of_old[mesh.triangles(f, k)];
+}
+
+}  // namespace
+
+Index weld_identical_vertices(Mesh& mesh) {
+  const Index n = mesh.num_vertices();
+  const Attributes& a = mesh.attributes;
+  // A vertex record: position then every attribute present, compared bit for bit.
+  auto record = [&](Index v) {
+    std::vector<double> r{mesh.positions(v, 0) + 0.0, mesh.positions(v, 1) + 0.0,
+                          mesh.positions(v, 2) + 0.0};
+    for (int k = 0; k < a.normals.cols() && a.normals.rows(); ++k) r.push_back(a.normals(v, k));
+    for (int k = 0; k < a.uvs.cols() && a.uvs.rows(); ++k) r.push_back(a.uvs(v, k));
+    for (int k = 0; k < a.colours.cols() && a.colours.rows(); ++k) r.push_back(a.colours(v, k));
+    return r;
+  };
+  std::vector<Index> order(static_cast<std::size_t>(n));
+  std::iota(order.begin(), order.end(), 0);
+  std::vector<std::vector<double>> records(static_cast<std::size_t>(n));
+  for (Index v = 0; v < n; ++v) records[v] = record(v);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](Index i, Index j) { return records[i] < records[j]; });
+  // Each group of equal records maps to its lowest index; keep first-occurrence order.
+  std::vector<Index> representative(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < order.size();) {
+    std::size_t j = i;
+    while (j < order.size() && records[order[j]] == records[order[i]]) ++j;
+    for (std::size_t k = i; k < j; ++k) representative[order[k]] = order[i];
+    i = j;
+  }
+  std::vector<Index> new_of_old(static_cast<std::size_t>(n), -1);
+  Index next = 0;
+  for (Index v = 0; v < n; ++v)
+    if (representative[v] == v) new_of_old[v] = next++;
+  for (Index v = 0; v < n; ++v) new_of_old[v] = new_of_old[representative[v]];
+  const Index removed = n - next;
+  if (removed > 0) {
+    // remap_vertices copies rows by new index; duplicates write the same row twice, harmlessly.
+    remap_vertices(mesh, new_of_old, next);
+  }
+  return removed;
+}
+
+Index remove_unreferenced_vertices(Mesh& mesh) {
+  const Index n = mesh.num_vertices();
+  std::vector<char> used(static_cast<std::size_t>(n), 0);
+  for (Index f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) used[mesh.triangles(f, k)] = 1;
+  std::vector<Index> new_of_old(static_cast<std::size_t>(n), -1);
+  Index next = 0;
+  for (Index v = 0; v < n; ++v)
+    if (used[v]) new_of_old[v] = next++;
+  if (next != n) remap_vertices(mesh, new_of_old, next);
+  return n - next;
+}
+
+Normals compute_vertex_normals(const Mesh& mesh) {
+  Normals normals = Normals::Zero(mesh.num_vertices(), 3);
+  for (Index f = 0; f < mesh.num_faces(); ++f) {
+    const auto t = mesh.triangles.row(f);
+    const Eigen::Vector3d a = mesh.positions.row(t[0]), b = mesh.positions.row(t[1]),
+                          c = mesh.positions.row(t[2]);
+    const Eigen::Vector3d area_normal = (b - a).cross(c - a);  // length = 2 * area
+    for (int k = 0; k < 3; ++k) normals.row(t[k]) += area_normal.transpose();
+  }
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
+    const double len = normals.row(v).norm();
+    if (len > 0) normals.row(v) /= len;
+  }
+  return normals;
+}
+
+}  // namespace lodkit

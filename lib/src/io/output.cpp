@@ -1,0 +1,68 @@
+#include "io/output.h"
+
+#include <lodkit/error.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace lodkit::detail {
+
+bool Output::flush() {
+  if (!file_ || buffer_.empty()) return !failed_;
+  if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) failed_ = true;
+  buffer_.clear();
+  return !failed_;
+}
+
+void write_file_atomically(const std::filesystem::path& path,
+                           const std::function<void(Output&)>& write) {
+  namespace fs = std::filesystem;
+  const std::string name = path.string();
+  if (fs::is_directory(path)) throw Error(fmt::format("{}: is a directory", name));
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  std::string tmpl = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
+  const int fd = ::mkstemp(tmpl.data());
+  if (fd < 0) throw Error(fmt::format("{}: cannot create a file there: {}", name, std::strerror(errno)));
+  ::fchmod(fd, 0644);
+  std::FILE* file = ::fdopen(fd, "wb");
+  if (!file) {
+    ::close(fd);
+    ::unlink(tmpl.c_str());
+    throw Error(fmt::format("{}: cannot open for writing", name));
+  }
+  auto discard = [&] {
+    std::fclose(file);
+    ::unlink(tmpl.c_str());
+  };
+  bool flushed = false;
+  try {
+    Output out(file);
+    write(out);
+    flushed = out.flush() && std::fflush(file) == 0;
+  } catch (...) {
+    // The temporary file is incomplete: remove it so no partial output is ever left behind.
+    discard();
+    throw;
+  }
+  if (!flushed) {
+    const int err = errno;
+    discard();
+    throw Error(fmt::format("{}: write failed: {}", name, std::strerror(err)));
+  }
+  if (std::fclose(file) != 0) {
+    const int err = errno;
+    ::unlink(tmpl.c_str());
+    throw Error(fmt::format("{}: write failed: {}", name, std::strerror(err)));
+  }
+  if (::rename(tmpl.c_str(), name.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmpl.c_str());
+    throw Error(fmt::format("{}: cannot rename the finished file into place: {}", name,
+                            std::strerror(err)));
+  }
+}
+
+}  // namespace lodkit::detail
