@@ -20,14 +20,14 @@ struct UvSphereOptions {
   double radius = 1.0;
   int segments = 32;  ///< around the z axis
   int rings = 16;     ///< pole to pole
-  std::optional<double> tolerance;
+  std::optional<double> tolerance{};
   bool uvs = false;   ///< equirectangular UVs; the u = 0/1 seam and the poles become split vertices
 };
 
 struct IcosphereOptions {
   double radius = 1.0;
   int subdivisions = 3;  ///< 20 * 4^subdivisions faces
-  std::optional<double> tolerance;
+  std::optional<double> tolerance{};
 };
 
 struct CylinderOptions {
@@ -35,14 +35,14 @@ struct CylinderOptions {
   double height = 2.0;  ///< from z = -height/2 to +height/2
   int segments = 32;
   int stacks = 1;
-  std::optional<double> tolerance;
+  std::optional<double> tolerance{};
 };
 
 struct ConeOptions {
   double radius = 1.0;  ///< of the base at z = -height/2; apex at z = +height/2
   double height = 2.0;
   int segments = 32;
-  std::optional<double> tolerance;
+  std::optional<double> tolerance{};
 };
 
 struct TorusOptions {
@@ -50,7 +50,7 @@ struct TorusOptions {
   double minor_radius = 0.25; ///< radius of the tube
   int major_segments = 48;
   int minor_segments = 16;
-  std::optional<double> tolerance;
+  std::optional<double> tolerance{};
   bool uvs = false;
 };
 

@@ -87,6 +87,7 @@ Mesh read_off(std::string_view bytes, const std::string& name) {
   }
   std::vector<Index> tris;
   std::vector<float> face_rgba;
+  bool face_colours = false;
   std::vector<long long> polygon;
   tris.reserve(static_cast<std::size_t>(3 * nf));
   for (long long f = 0; f < nf; ++f) {
@@ -103,10 +104,13 @@ Mesh read_off(std::string_view bytes, const std::string& name) {
     }
     float rgba[4];
     const bool coloured = read_colour(c, rgba);
-    if (coloured && face_rgba.empty()) face_rgba.assign(4 * tris.size() / 3, 1.0f);
+    if (coloured && !face_colours) {  // the first coloured face: earlier faces default to white
+      face_colours = true;
+      face_rgba.assign(4 * tris.size() / 3, 1.0f);
+    }
     triangulate_fan(polygon, polygon.size(), [&](long long i, long long j, long long k) {
       tris.insert(tris.end(), {Index(i), Index(j), Index(k)});
-      if (!face_rgba.empty()) {
+      if (face_colours) {
         if (coloured) face_rgba.insert(face_rgba.end(), rgba, rgba + 4);
         else face_rgba.insert(face_rgba.end(), {1.0f, 1.0f, 1.0f, 1.0f});
       }
@@ -117,7 +121,7 @@ Mesh read_off(std::string_view bytes, const std::string& name) {
   if (!c.done()) c.fail("data after the last face (header counts too small?)");
   const auto nt = static_cast<Index>(tris.size() / 3);
   mesh.triangles = Eigen::Map<const Triangles>(tris.data(), nt, 3);
-  if (!face_rgba.empty()) a.face_colours = Eigen::Map<const Colours>(face_rgba.data(), nt, 4);
+  if (face_colours) a.face_colours = Eigen::Map<const Colours>(face_rgba.data(), nt, 4);
   return mesh;
 }
 

@@ -73,9 +73,10 @@ Mesh read_ascii_stl(std::string_view bytes, const std::string& name) {
         c.skip_whitespace();
         const char* vat = c.pos();
         if (c.word() != "vertex") c.fail(vat, "expected 'vertex' (facets must be triangles)");
-        const double x = c.finite_double("vertex coordinate");
-        const double y = c.finite_double("vertex coordinate");
-        const double z = c.finite_double("vertex coordinate");
+        // STL is single precision in both encodings: round like the binary reader does.
+        const double x = static_cast<float>(c.finite_double("vertex coordinate"));
+        const double y = static_cast<float>(c.finite_double("vertex coordinate"));
+        const double z = static_cast<float>(c.finite_double("vertex coordinate"));
         tris.push_back(welder.add(x, y, z));
         c.next_line();
       }

@@ -174,15 +174,22 @@ Mesh make_uv_sphere(const UvSphereOptions& o) {
     }
     return b.build();
   }
-  // With UVs: a (segments + 1) x (rings + 1) grid; the u seam and the poles are split vertices.
-  auto at = [&](int i, int j) { return i * (segments + 1) + j; };
-  for (int i = 0; i <= rings; ++i)
-    for (int j = 0; j <= segments; ++j) {
+  // With UVs: rings - 1 rows of segments + 1 vertices (the u = 0 and u = 1 columns are a seam),
+  // plus one pole vertex per segment at each end, with u at the middle of its segment.
+  const Index first_row = segments;  // index of the first vertex of ring 1
+  auto at = [&](int i, int j) -> Index {
+    if (i == 0) return j;
+    if (i == rings) return first_row + (rings - 1) * (segments + 1) + j;
+    return first_row + (i - 1) * (segments + 1) + j;
+  };
+  for (int i = 0; i <= rings; ++i) {
+    const bool pole = i == 0 || i == rings;
+    for (int j = 0; j < (pole ? segments : segments + 1); ++j) {
       const Eigen::Vector3d p = on_sphere(o.radius, i, rings, j, segments);
       b.vertex(p.x(), p.y(), p.z());
-      const bool pole = i == 0 || i == rings;
       b.uv((j + (pole ? 0.5 : 0.0)) / segments, 1.0 - static_cast<double>(i) / rings);
     }
+  }
   for (int i = 0; i < rings; ++i)
     for (int j = 0; j < segments; ++j) {
       if (i == 0) b.triangle(at(0, j), at(1, j), at(1, j + 1));

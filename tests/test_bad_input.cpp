@@ -1,0 +1,94 @@
+// The bad-input corpus through the library: every file is refused with an Error that names the file
+// and the problem, and a failed write never leaves a file behind or touches an existing one.
+#include <gtest/gtest.h>
+#include <lodkit/error.h>
+#include <lodkit/io.h>
+#include <lodkit/primitives.h>
+
+#include "bad_corpus.h"
+#include "test_util.h"
+
+namespace lodkit {
+namespace {
+
+TEST(BadInput, EveryCorpusFileIsAClearError) {
+  test::ScratchDir dir("bad");
+  const auto corpus = test::write_bad_corpus(dir.path());
+  ASSERT_GE(corpus.size(), 30u);
+  for (const auto& bad : corpus) {
+    const std::string path = (dir / bad.name).string();
+    try {
+      read_mesh(path);
+      ADD_FAILURE() << bad.name << ": was accepted";
+    } catch (const Error& e) {
+      const std::string msg = e.what();
+      EXPECT_EQ(msg.rfind(path + ": ", 0), 0u) << bad.name << ": message does not start with the file: " << msg;
+      EXPECT_NE(msg.find(bad.expected), std::string::npos) << bad.name << ": expected '" << bad.expected
+                                                           << "' in: " << msg;
+    }
+  }
+}
+
+TEST(BadInput, MissingFileAndDirectory) {
+  test::ScratchDir dir("missing");
+  EXPECT_THROW(read_mesh(dir / "nope.ply"), Error);
+  std::filesystem::create_directory(dir / "d.obj");
+  try {
+    read_mesh(dir / "d.obj");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos);
+  }
+}
+
+TEST(BadInput, EveryTruncationOfAGoodFileIsHandled) {
+  // Every prefix of a small file in each format either reads as a valid mesh or raises Error:
+  // never a crash, never garbage (validate() holds for anything returned).
+  const Mesh m = make_box({.divisions = 1});
+  for (MeshFormat f : {MeshFormat::Obj, MeshFormat::Ply, MeshFormat::Off, MeshFormat::Stl, MeshFormat::Draco}) {
+    WriteOptions w;
+    const std::string bytes = write_mesh_to_memory(m, f, w);
+    // A text file cut only in its trailing whitespace is still the whole file.
+    const std::size_t content = bytes.find_last_not_of(" \t\r\n") + 1;
+    int accepted = 0;
+    for (std::size_t n = 0; n < content; ++n) {
+      try {
+        const Mesh part = read_mesh_from_memory(std::string_view(bytes).substr(0, n), f, "cut");
+        validate(part);
+        ++accepted;
+      } catch (const Error&) {
+      }
+    }
+    // Formats with counts in the header must refuse every proper prefix.
+    if (f == MeshFormat::Ply || f == MeshFormat::Stl || f == MeshFormat::Off) EXPECT_EQ(accepted, 0) << format_name(f);
+  }
+}
+
+TEST(AtomicWrite, FailedWriteLeavesNothingAndKeepsTheOldFile) {
+  test::ScratchDir dir("atomic");
+  const auto target = dir / "out.drc";
+  test::write_text(target, "precious");
+  Mesh no_faces;
+  no_faces.positions = Positions::Zero(3, 3);
+  EXPECT_THROW(write_mesh(no_faces, target), Error);  // Draco refuses a mesh without faces
+  EXPECT_EQ(test::read_bytes(target), "precious");
+  EXPECT_EQ(dir.entries(), 1u);
+
+  Mesh bad = test::single_triangle();
+  bad.triangles(0, 0) = 7;
+  EXPECT_THROW(write_mesh(bad, dir / "bad.ply"), Error);
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.ply"));
+  EXPECT_EQ(dir.entries(), 1u);
+}
+
+TEST(AtomicWrite, UnwritableDirectoryIsAClearError) {
+  try {
+    write_mesh(test::single_triangle(), "/nonexistent-dir-for-lodkit/x.ply");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-dir-for-lodkit/x.ply"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace lodkit

@@ -1,0 +1,118 @@
+// End-to-end: the lodkit binary as a user runs it.
+#include <gtest/gtest.h>
+#include <lodkit/io.h>
+
+#include <sys/wait.h>
+
+#include "bad_corpus.h"
+#include "test_util.h"
+
+#ifndef LODKIT_CLI
+#error "LODKIT_CLI must name the lodkit executable"
+#endif
+
+namespace lodkit {
+namespace {
+
+struct CliRun {
+  int status;
+  std::string out, err;
+};
+
+CliRun run(const test::ScratchDir& dir, const std::string& args, const std::string& stdin_file = "") {
+  const auto out = dir / ".stdout", err = dir / ".stderr";
+  std::string cmd = "cd '" + dir.path().string() + "' && '" LODKIT_CLI "' " + args + " > '" + out.string() +
+                    "' 2> '" + err.string() + "'";
+  if (!stdin_file.empty()) cmd += " < '" + stdin_file + "'";
+  const int raw = std::system(cmd.c_str());
+  CliRun r{WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, test::read_bytes(out), test::read_bytes(err)};
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
+  return r;
+}
+
+TEST(Cli, VersionAndHelp) {
+  test::ScratchDir dir("cli");
+  CliRun r = run(dir, "--version");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("0."), std::string::npos);
+  for (const char* cmd : {"--help", "info --help", "convert --help", "generate --help"}) {
+    r = run(dir, cmd);
+    EXPECT_EQ(r.status, 0) << cmd;
+    EXPECT_NE(r.out.find("Examples:"), std::string::npos) << cmd;
+  }
+}
+
+TEST(Cli, UsageErrorsExitTwo) {
+  test::ScratchDir dir("cli");
+  EXPECT_EQ(run(dir, "").status, 2);
+  EXPECT_EQ(run(dir, "frobnicate").status, 2);
+  EXPECT_EQ(run(dir, "generate dodecahedron -o x.ply").status, 2);
+  EXPECT_EQ(run(dir, "generate torus").status, 2);  // no -o
+  EXPECT_EQ(run(dir, "convert a.obj b.drc --quantize 99").status, 2);
+}
+
+TEST(Cli, GeneratedTorusIsClosedManifoldGenusOne) {
+  test::ScratchDir dir("cli");
+  ASSERT_EQ(run(dir, "generate torus -o t.ply").status, 0);
+  const CliRun r = run(dir, "info t.ply --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("\"closed\": true"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"manifold\": true"), std::string::npos);
+  EXPECT_NE(r.out.find("\"genus\": 1"), std::string::npos);
+  const CliRun text = run(dir, "info t.ply");
+  EXPECT_NE(text.out.find("closed, manifold, oriented, 1 component, genus 1"), std::string::npos) << text.out;
+}
+
+TEST(Cli, ConvertChainKeepsCounts) {
+  test::ScratchDir dir("cli");
+  ASSERT_EQ(run(dir, "generate sphere -o s.obj --uvs --tolerance 0.01").status, 0);
+  const Mesh original = read_mesh(dir / "s.obj");
+  ASSERT_EQ(run(dir, "convert s.obj s.ply").status, 0);
+  ASSERT_EQ(run(dir, "convert s.ply s.drc --quantize 16").status, 0);
+  ASSERT_EQ(run(dir, "convert s.drc -o back.obj").status, 0);
+  const Mesh back = read_mesh(dir / "back.obj");
+  EXPECT_EQ(back.num_vertices(), original.num_vertices());
+  EXPECT_EQ(back.num_faces(), original.num_faces());
+  EXPECT_TRUE(back.has_uvs());
+}
+
+TEST(Cli, StdinAndStdout) {
+  test::ScratchDir dir("cli");
+  ASSERT_EQ(run(dir, "generate box -o box.off").status, 0);
+  const CliRun r = run(dir, "convert - - --from off --to obj", (dir / "box.off").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Mesh m = read_mesh_from_memory(r.out, MeshFormat::Obj, "stdout");
+  EXPECT_EQ(m.num_faces(), 12);
+  EXPECT_EQ(run(dir, "convert - out.ply", (dir / "box.off").string()).status, 1);  // no --from
+}
+
+TEST(Cli, RefusesToOverwriteTheInput) {
+  test::ScratchDir dir("cli");
+  ASSERT_EQ(run(dir, "generate box -o box.ply").status, 0);
+  const std::string before = test::read_bytes(dir / "box.ply");
+  const CliRun r = run(dir, "convert box.ply ./box.ply");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("refusing to overwrite the input"), std::string::npos) << r.err;
+  EXPECT_EQ(test::read_bytes(dir / "box.ply"), before);
+}
+
+TEST(Cli, BadInputCorpusExitsOneNamingTheFileAndWritesNothing) {
+  test::ScratchDir dir("cli-bad");
+  const auto corpus = test::write_bad_corpus(dir.path());
+  const std::size_t files_before = dir.entries();
+  for (const auto& bad : corpus) {
+    const CliRun r = run(dir, "convert '" + bad.name + "' out.ply");
+    EXPECT_EQ(r.status, 1) << bad.name;
+    const std::string prefix = "lodkit: error: " + bad.name + ": ";
+    EXPECT_EQ(r.err.rfind(prefix, 0), 0u) << bad.name << ": " << r.err;
+    EXPECT_NE(r.err.find(bad.expected), std::string::npos) << bad.name << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out.ply")) << bad.name;
+    EXPECT_EQ(run(dir, "info '" + bad.name + "'").status, 1) << bad.name;
+  }
+  EXPECT_EQ(run(dir, "info missing.obj").status, 1);
+  EXPECT_EQ(dir.entries(), files_before) << "no stray output or temporary files";
+}
+
+}  // namespace
+}  // namespace lodkit

@@ -1,0 +1,147 @@
+#include <gtest/gtest.h>
+#include <lodkit/error.h>
+#include <lodkit/inspect.h>
+#include <lodkit/primitives.h>
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+
+#include "core/geometry.h"
+
+namespace lodkit {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+void expect_closed_solid(const Mesh& m, long long genus, double volume, double rel_tol) {
+  const MeshReport r = inspect(m);
+  EXPECT_TRUE(r.closed);
+  EXPECT_TRUE(r.oriented);
+  EXPECT_EQ(r.components, 1);
+  EXPECT_EQ(r.degenerate_faces, 0);
+  EXPECT_EQ(r.duplicate_faces, 0);
+  ASSERT_TRUE(r.genus);
+  EXPECT_EQ(*r.genus, genus);
+  ASSERT_TRUE(r.volume);
+  EXPECT_GT(*r.volume, 0.0) << "outward orientation";
+  EXPECT_NEAR(*r.volume, volume, rel_tol * volume);
+}
+
+TEST(Primitives, ClosedSolidsAreOutwardManifoldsOfTheRightGenus) {
+  expect_closed_solid(make_box({.size = {1, 2, 3}, .divisions = 4}), 0, 6.0, 1e-12);
+  expect_closed_solid(make_square_pyramid({.base = 2, .height = 3}), 0, 4.0, 1e-12);
+  // Inscribed tessellations: volume a little below the true one.
+  expect_closed_solid(make_uv_sphere({.radius = 2, .segments = 64, .rings = 32}), 0, 4.0 / 3 * kPi * 8, 0.01);
+  expect_closed_solid(make_icosphere({.radius = 2, .subdivisions = 4}), 0, 4.0 / 3 * kPi * 8, 0.01);
+  expect_closed_solid(make_cylinder({.radius = 1, .height = 2, .segments = 128, .stacks = 3}), 0, 2 * kPi, 0.001);
+  expect_closed_solid(make_cone({.radius = 1, .height = 3, .segments = 128}), 0, kPi, 0.001);
+  expect_closed_solid(make_torus({.major_radius = 2, .minor_radius = 0.5, .major_segments = 128,
+                                  .minor_segments = 64}),
+                      1, 2 * kPi * kPi * 2 * 0.25, 0.005);
+  // With UV seams the topology is the same.
+  expect_closed_solid(make_uv_sphere({.segments = 16, .rings = 8, .uvs = true}), 0, 4.0 / 3 * kPi, 0.1);
+  expect_closed_solid(make_torus({.major_segments = 24, .minor_segments = 12, .uvs = true}), 1,
+                      2 * kPi * kPi * 0.0625, 0.1);
+}
+
+TEST(Primitives, GridIsAFlatSheetFacingUp) {
+  const Mesh g = make_grid({.size = {4, 2}, .divisions_x = 8, .divisions_y = 4, .uvs = true});
+  EXPECT_EQ(g.num_faces(), 64);
+  EXPECT_EQ(g.num_vertices(), 45);
+  for (Index f = 0; f < g.num_faces(); ++f) {
+    const auto t = g.triangles.row(f);
+    const Eigen::Vector3d n = (g.positions.row(t[1]) - g.positions.row(t[0]))
+                                  .cross(g.positions.row(t[2]) - g.positions.row(t[0]));
+    EXPECT_GT(n.z(), 0.0);
+  }
+  EXPECT_EQ(g.attributes.uvs.row(44), Eigen::RowVector2d(1, 1));
+}
+
+// Largest distance from points sampled densely on the true surface to the mesh (brute force).
+double sampled_deviation(const Mesh& m, const std::function<Eigen::Vector3d(double, double)>& surface,
+                         int samples_u, int samples_v) {
+  double worst = 0.0;
+  for (int i = 0; i < samples_u; ++i)
+    for (int j = 0; j <= samples_v; ++j) {
+      const Eigen::Vector3d p = surface((i + 0.37) / samples_u, static_cast<double>(j) / samples_v);
+      double best = INFINITY;
+      for (Index f = 0; f < m.num_faces(); ++f) {
+        const auto t = m.triangles.row(f);
+        const Eigen::Vector3d q = detail::closest_point_on_triangle(
+            p, m.positions.row(t[0]), m.positions.row(t[1]), m.positions.row(t[2]));
+        best = std::min(best, (q - p).norm());
+      }
+      worst = std::max(worst, best);
+    }
+  return worst;
+}
+
+TEST(Primitives, ToleranceBoundsTheTrueSurfaceAndIsNotExceededByFar) {
+  const double r = 1.5, tol = 0.01;
+  const Mesh sphere = make_uv_sphere({.radius = r, .tolerance = tol});
+  const double dev = sampled_deviation(
+      sphere,
+      [&](double u, double v) {
+        const double phi = 2 * kPi * u, theta = kPi * v;
+        return Eigen::Vector3d(r * std::sin(theta) * std::cos(phi), r * std::sin(theta) * std::sin(phi),
+                               r * std::cos(theta));
+      },
+      97, 61);
+  EXPECT_LE(dev, tol);
+  EXPECT_GT(dev, 0.4 * tol) << "tessellation much finer than needed";
+
+  const Mesh ico = make_icosphere({.radius = r, .tolerance = tol});
+  EXPECT_LE(sampled_deviation(ico, [&](double u, double v) {
+              const double phi = 2 * kPi * u, theta = kPi * v;
+              return Eigen::Vector3d(r * std::sin(theta) * std::cos(phi),
+                                     r * std::sin(theta) * std::sin(phi), r * std::cos(theta));
+            }, 53, 37), tol);
+
+  const Mesh torus = make_torus({.major_radius = 1, .minor_radius = 0.3, .tolerance = tol});
+  EXPECT_LE(sampled_deviation(torus, [&](double u, double v) {
+              const double phi = 2 * kPi * u, theta = 2 * kPi * v, ring = 1 + 0.3 * std::cos(theta);
+              return Eigen::Vector3d(ring * std::cos(phi), ring * std::sin(phi), 0.3 * std::sin(theta));
+            }, 71, 47), tol);
+}
+
+TEST(Primitives, CircleSegmentsAreTheFewestWithinTolerance) {
+  for (double tol : {0.5, 0.1, 0.01, 1e-4}) {
+    const int n = circle_segments_for_tolerance(1.0, tol);
+    EXPECT_LE(circle_chordal_error(1.0, n), tol);
+    if (n > 3) {
+      EXPECT_GT(circle_chordal_error(1.0, n - 1), tol);
+    }
+  }
+  const Mesh cyl = make_cylinder({.radius = 1, .tolerance = 0.01});
+  const int n = circle_segments_for_tolerance(1.0, 0.01);
+  EXPECT_EQ(cyl.num_vertices(), 2 * n + 2);
+  EXPECT_EQ(circle_segments_for_tolerance(1.0, 5.0), 3);
+}
+
+TEST(Primitives, FinerToleranceNeverGivesFewerFaces) {
+  Index previous = 0;
+  for (double tol : {0.1, 0.03, 0.01, 0.003}) {
+    const Index faces = make_torus({.tolerance = tol}).num_faces();
+    EXPECT_GE(faces, previous);
+    previous = faces;
+  }
+}
+
+TEST(Primitives, BadParametersAreClearErrors) {
+  EXPECT_THROW(make_uv_sphere({.radius = -1}), Error);
+  EXPECT_THROW(make_uv_sphere({.segments = 2}), Error);
+  EXPECT_THROW(make_torus({.major_radius = 1, .minor_radius = 2}), Error);
+  EXPECT_THROW(make_cylinder({.tolerance = 0.0}), Error);
+  EXPECT_THROW(make_box({.size = {1, 0, 1}}), Error);
+  EXPECT_THROW(make_icosphere({.subdivisions = 11}), Error);
+  try {
+    make_cone({.height = NAN});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cone: height"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace lodkit

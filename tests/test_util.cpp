@@ -1,0 +1,56 @@
+#include "test_util.h"
+
+#include <fstream>
+#include <random>
+#include <sstream>
+
+namespace lodkit::test {
+
+ScratchDir::ScratchDir(const std::string& tag) {
+  std::random_device rd;
+  path_ = std::filesystem::temp_directory_path() /
+          ("lodkit-test-" + tag + "-" + std::to_string(rd()) + std::to_string(rd()));
+  std::filesystem::create_directories(path_);
+}
+
+ScratchDir::~ScratchDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+std::size_t ScratchDir::entries() const {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(path_)) ++n;
+  return n;
+}
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+Mesh tetrahedron() {
+  Mesh m;
+  m.positions.resize(4, 3);
+  m.positions << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  m.triangles.resize(4, 3);
+  m.triangles << 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2;
+  return m;
+}
+
+Mesh single_triangle() {
+  Mesh m;
+  m.positions.resize(3, 3);
+  m.positions << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+  m.triangles.resize(1, 3);
+  m.triangles << 0, 1, 2;
+  return m;
+}
+
+}  // namespace lodkit::test

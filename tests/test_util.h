@@ -1,0 +1,32 @@
+#pragma once
+// Helpers shared by the tests: scratch directories and tiny hand-built meshes.
+#include <lodkit/mesh.h>
+
+#include <filesystem>
+#include <string>
+
+namespace lodkit::test {
+
+/// A fresh empty directory under the system temp dir, removed when the object dies.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& tag);
+  ~ScratchDir();
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+  /// Number of entries in the directory (to check that nothing was left behind).
+  std::size_t entries() const;
+
+ private:
+  std::filesystem::path path_;
+};
+
+void write_text(const std::filesystem::path& path, const std::string& text);
+std::string read_bytes(const std::filesystem::path& path);
+
+/// Regular tetrahedron-like solid, outward oriented (volume 1/6 for the unit corner tetrahedron).
+Mesh tetrahedron();
+/// One triangle.
+Mesh single_triangle();
+
+}  // namespace lodkit::test
