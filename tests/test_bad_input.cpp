@@ -60,7 +60,9 @@ TEST(BadInput, EveryTruncationOfAGoodFileIsHandled) {
       }
     }
     // Formats with counts in the header must refuse every proper prefix.
-    if (f == MeshFormat::Ply || f == MeshFormat::Stl || f == MeshFormat::Off) EXPECT_EQ(accepted, 0) << format_name(f);
+    if (f == MeshFormat::Ply || f == MeshFormat::Stl || f == MeshFormat::Off) {
+      EXPECT_EQ(accepted, 0) << format_name(f);
+    }
   }
 }
 

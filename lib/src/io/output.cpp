@@ -23,7 +23,10 @@ void write_file_atomically(const std::filesystem::path& path,
   const std::string name = path.string();
   if (fs::is_directory(path)) throw Error(fmt::format("{}: is a directory", name));
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
-  std::string tmpl = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
+  std::string hidden_name(".");  // appended piecewise: GCC 12 warns falsely on "." + string
+  hidden_name += path.filename().string();
+  hidden_name += ".tmp-XXXXXX";
+  std::string tmpl = (dir / hidden_name).string();
   const int fd = ::mkstemp(tmpl.data());
   if (fd < 0) throw Error(fmt::format("{}: cannot create a file there: {}", name, std::strerror(errno)));
   ::fchmod(fd, 0644);
