@@ -14,7 +14,7 @@
 int main(int argc, char** argv) {
   using namespace lodkit::cli;
   CLI::App app{"lodkit " LODKIT_VERSION_STRING
-               ": mesh processing and level of detail (inspect, convert, generate)",
+               ": mesh processing and level of detail",
                "lodkit"};
   app.set_version_flag("--version", LODKIT_VERSION_STRING);
   app.require_subcommand(1);
@@ -25,10 +25,13 @@ int main(int argc, char** argv) {
   lodkit generate torus -o torus.ply --tolerance 0.001
   lodkit info torus.ply --json
   lodkit convert torus.ply torus.drc --quantize 14
+  lodkit simplify bunny.ply -o bunny_small.ply --ratio 0.1 --measure
+  lodkit compare bunny.ply bunny_small.ply
 Run 'lodkit <command> --help' for a command's options. Docs: docs/commands/.)");
 
   std::vector<Command> commands{add_info_command(app, global), add_convert_command(app, global),
-                                add_generate_command(app, global)};
+                                add_generate_command(app, global),
+                                add_simplify_command(app, global), add_compare_command(app, global)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

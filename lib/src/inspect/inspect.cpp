@@ -5,16 +5,11 @@
 #include <vector>
 
 #include "core/hash.h"
+#include "core/topology.h"
 #include "core/union_find.h"
 
 namespace lodkit {
 namespace {
-
-struct HalfEdge {
-  Index lo, hi;   // welded endpoints, lo < hi
-  bool forward;   // the face traverses lo -> hi
-  bool operator<(const HalfEdge& o) const { return lo != o.lo ? lo < o.lo : hi < o.hi; }
-};
 
 struct SortedTriangle {
   Index a, b, c;
@@ -26,39 +21,6 @@ struct SortedTriangleHash {
                          detail::mix64(std::uint32_t(t.c)));
   }
 };
-
-// A vertex is manifold when the faces around it form a single fan: link its neighbours through
-// the faces (each face joins its two other corners) and count the connected pieces.
-Index count_non_manifold_vertices(Index num_vertices, const std::vector<std::array<Index, 3>>& faces) {
-  std::vector<Index> start(static_cast<std::size_t>(num_vertices) + 1, 0);
-  for (const auto& f : faces)
-    for (Index v : f) ++start[v + 1];
-  for (Index v = 0; v < num_vertices; ++v) start[v + 1] += start[v];
-  std::vector<std::pair<Index, Index>> links(start.back());
-  std::vector<Index> fill(start.begin(), start.end() - 1);
-  for (const auto& f : faces)
-    for (int k = 0; k < 3; ++k) links[fill[f[k]]++] = {f[(k + 1) % 3], f[(k + 2) % 3]};
-
-  Index count = 0;
-  std::vector<Index> local;
-  for (Index v = 0; v < num_vertices; ++v) {
-    const Index b = start[v], e = start[v + 1];
-    if (e - b < 2) continue;
-    local.clear();
-    for (Index i = b; i < e; ++i) local.push_back(links[i].first), local.push_back(links[i].second);
-    std::sort(local.begin(), local.end());
-    local.erase(std::unique(local.begin(), local.end()), local.end());
-    detail::UnionFind uf(local.size());
-    auto id = [&](Index x) {
-      return static_cast<int>(std::lower_bound(local.begin(), local.end(), x) - local.begin());
-    };
-    std::size_t pieces = local.size();
-    for (Index i = b; i < e; ++i)
-      if (uf.unite(id(links[i].first), id(links[i].second))) --pieces;
-    if (pieces > 1) ++count;
-  }
-  return count;
-}
 
 }  // namespace
 
@@ -107,32 +69,19 @@ MeshReport inspect(const Mesh& mesh) {
     r.welded_vertices += welded_referenced[v];
   }
 
-  // Edges: sort the half-edges so each undirected edge's uses are adjacent.
-  std::vector<HalfEdge> half;
-  half.reserve(3 * faces.size());
-  for (const auto& f : faces)
-    for (int k = 0; k < 3; ++k) {
-      const Index a = f[k], b = f[(k + 1) % 3];
-      half.push_back({std::min(a, b), std::max(a, b), a < b});
-    }
-  std::sort(half.begin(), half.end());
   detail::UnionFind boundary(static_cast<std::size_t>(r.vertices));
   std::vector<char> on_boundary(static_cast<std::size_t>(r.vertices), 0);
-  for (std::size_t i = 0; i < half.size();) {
-    std::size_t j = i;
-    while (j < half.size() && half[j].lo == half[i].lo && half[j].hi == half[i].hi) ++j;
-    const std::size_t uses = j - i;
+  for (const detail::EdgeUse& e : detail::classify_edges(faces)) {
     ++r.edges;
-    if (uses == 1) {
+    if (e.faces == 1) {
       ++r.boundary_edges;
-      boundary.unite(half[i].lo, half[i].hi);
-      on_boundary[half[i].lo] = on_boundary[half[i].hi] = 1;
-    } else if (uses == 2) {
-      if (half[i].forward == half[i + 1].forward) ++r.inconsistently_oriented_edges;
+      boundary.unite(e.lo, e.hi);
+      on_boundary[e.lo] = on_boundary[e.hi] = 1;
+    } else if (e.faces == 2) {
+      r.inconsistently_oriented_edges += !e.consistent;
     } else {
       ++r.non_manifold_edges;
     }
-    i = j;
   }
   for (Index v = 0; v < r.vertices; ++v)
     if (on_boundary[v] && boundary.find(v) == v) ++r.boundary_loops;
@@ -142,7 +91,7 @@ MeshReport inspect(const Mesh& mesh) {
   for (Index v = 0; v < r.vertices; ++v)
     if (welded_referenced[v] && parts.find(v) == v) ++r.components;
 
-  r.non_manifold_vertices = count_non_manifold_vertices(r.vertices, faces);
+  for (char bad : detail::non_manifold_fans(r.vertices, faces)) r.non_manifold_vertices += bad;
   r.manifold = r.non_manifold_edges == 0 && r.non_manifold_vertices == 0;
   r.oriented = r.manifold && r.inconsistently_oriented_edges == 0;
   r.closed = r.manifold && r.boundary_edges == 0 && !faces.empty();

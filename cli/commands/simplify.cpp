@@ -1,0 +1,139 @@
+// lodkit simplify: edge-collapse simplification (quadric, hoppe, edge-length).
+#include <lodkit/error.h>
+#include <lodkit/metrics.h>
+#include <lodkit/simplify.h>
+
+#include <cstdio>
+#include <fmt/format.h>
+#include <memory>
+#include <unistd.h>
+
+#include "common.h"
+
+namespace lodkit::cli {
+namespace {
+
+struct SimplifyCliOptions {
+  std::string input, output;
+  std::optional<std::string> format;
+  std::string method = "quadric", placement = "optimal";
+  std::optional<Index> faces;
+  std::optional<double> ratio;
+  std::optional<std::string> max_error;
+  bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
+  bool measure = false, json = false;
+  double max_normal_change = 90.0;
+  std::uint64_t seed = 1;
+};
+
+// "0.5" is absolute; "0.5%" is a percentage of the bounding-box diagonal.
+double parse_error(const std::string& text, double diagonal) {
+  std::string s = text;
+  const bool percent = !s.empty() && s.back() == '%';
+  if (percent) s.pop_back();
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(s, &used);
+  } catch (...) {
+    used = 0;
+  }
+  if (used != s.size() || !(v >= 0)) throw Error(fmt::format("simplify: --max-error '{}' is not a distance or a percentage", text));
+  return percent ? v / 100.0 * diagonal : v;
+}
+
+int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
+  const Mesh mesh = read_input(o.input, o.format);
+  SimplifyOptions s;
+  s.method = *parse_method(o.method);
+  s.placement = o.placement == "endpoint" ? Placement::Endpoint
+                : o.placement == "midpoint" ? Placement::Midpoint : Placement::Optimal;
+  s.target_faces = o.faces;
+  s.target_ratio = o.ratio;
+  const auto box = bounding_box(mesh);
+  const double diagonal = box.isEmpty() ? 0.0 : box.diagonal().norm();
+  if (o.max_error) s.max_error = parse_error(*o.max_error, diagonal);
+  s.lock_boundary = o.lock_boundary;
+  if (o.preserve_boundary) s.boundary_weight = 1000.0;
+  s.preserve_topology = !o.allow_topology_change;
+  s.max_normal_change_deg = o.max_normal_change;
+  s.seed = o.seed;
+  const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
+  if (show_progress)
+    s.progress = [](double f) {
+      const int width = 40, filled = static_cast<int>(f * width);
+      std::fprintf(stderr, "\rsimplify [%s%s] %3d%%", std::string(filled, '#').c_str(),
+                   std::string(width - filled, ' ').c_str(), static_cast<int>(100 * f));
+      if (f >= 1.0) std::fputc('\n', stderr);
+    };
+
+  const SimplifyResult r = simplify(mesh, s);
+  write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
+
+  std::optional<Comparison> measured;
+  if (o.measure) measured = compare(mesh, r.mesh);
+  const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
+  if (o.json) {
+    nlohmann::json j{{"input", o.input}, {"output", o.output}, {"method", o.method},
+                     {"faces_in", r.faces_in}, {"faces_out", r.faces_out}, {"vertices_in", r.vertices_in},
+                     {"vertices_out", r.vertices_out}, {"target_faces", r.target_faces},
+                     {"collapses", r.collapses}, {"seconds", r.seconds}, {"error_estimate", r.error},
+                     {"error_estimate_percent", r.error * pct},
+                     {"reason", r.reason == StopReason::TargetReached ? "target" :
+                                r.reason == StopReason::ErrorLimit ? "error-limit" : "no-legal-collapse"},
+                     {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}};
+    if (measured)
+      j["measured"] = {{"hausdorff", measured->hausdorff}, {"hausdorff_percent", measured->percent(measured->hausdorff)},
+                       {"rms", measured->rms}, {"rms_percent", measured->percent(measured->rms)},
+                       {"mean", measured->mean}, {"normal_deviation_mean_deg",
+                        0.5 * (measured->a_to_b.normal_deviation_mean_deg + measured->b_to_a.normal_deviation_mean_deg)}};
+    fmt::print("{}\n", j.dump(2));
+  } else if (!global.quiet) {
+    fmt::print(stderr, "simplify ({}): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", o.method,
+               thousands(r.faces_in), thousands(r.faces_out), thousands(r.vertices_in), thousands(r.vertices_out),
+               r.seconds);
+    fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
+    if (measured)
+      fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%)\n", measured->hausdorff,
+                 measured->percent(measured->hausdorff), measured->rms, measured->percent(measured->rms));
+    fmt::print(stderr, "  {}\n", r.reason_text);
+  }
+  if (r.reason != StopReason::TargetReached && !global.quiet && o.json)
+    fmt::print(stderr, "simplify: {}\n", r.reason_text);
+  return 0;
+}
+
+}  // namespace
+
+Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
+  auto opt = std::make_shared<SimplifyCliOptions>();
+  CLI::App* sub = app.add_subcommand("simplify", "Simplify a mesh by edge collapses");
+  sub->add_option("input", opt->input, "Input mesh, or - for stdin (with --format)")->required();
+  sub->add_option("-o,--output", opt->output, "Output mesh, or - for stdout (with --format)")->required();
+  sub->add_option("--format", opt->format, "Format of stdin/stdout")->check(format_validator());
+  sub->add_option("--method", opt->method, "quadric (default), hoppe or edge-length")
+      ->check(CLI::IsMember({"quadric", "hoppe", "edge-length"}))->capture_default_str();
+  sub->add_option("--placement", opt->placement, "optimal, endpoint or midpoint")
+      ->check(CLI::IsMember({"optimal", "endpoint", "midpoint"}))->capture_default_str();
+  sub->add_option("--faces", opt->faces, "Target face count")->check(CLI::NonNegativeNumber);
+  sub->add_option("--ratio", opt->ratio, "Target as a fraction of the input faces (0-1)")->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--max-error", opt->max_error, "Largest error per collapse: a distance, or N% of the diagonal");
+  sub->add_flag("--preserve-boundary", opt->preserve_boundary, "Weight boundary constraint planes 100x higher");
+  sub->add_flag("--lock-boundary", opt->lock_boundary, "Never move or remove boundary vertices");
+  sub->add_flag("--allow-topology-change", opt->allow_topology_change,
+                "Skip the link condition and flip checks (shows how naive methods fail)");
+  sub->add_option("--max-normal-change", opt->max_normal_change, "Largest turn of a face in one collapse (degrees)")
+      ->check(CLI::Range(1.0, 180.0))->capture_default_str();
+  sub->add_option("--seed", opt->seed, "Seed for hoppe's surface samples")->capture_default_str();
+  sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
+  sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
+  sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
+Examples:
+  lodkit simplify bunny.ply -o bunny_10k.ply --faces 10000
+  lodkit simplify scan.obj -o scan_small.obj --ratio 0.05 --measure
+  lodkit simplify part.stl -o part_lo.stl --max-error 0.1% --lock-boundary
+  lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
+  return {sub, [opt, &global] { return run_simplify(*opt, global); }};
+}
+
+}  // namespace lodkit::cli

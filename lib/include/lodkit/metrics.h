@@ -1,0 +1,49 @@
+#pragma once
+// compare(): how far two surfaces are from each other, measured by dense deterministic sampling.
+//
+// Each direction samples the first surface at its vertices, along its edges and inside its faces
+// (a stratified R2 low-discrepancy pattern, allotted by area) and finds each sample's closest point
+// on the other surface with an AABB tree. Hausdorff is the largest such distance; mean and RMS are
+// area-weighted over the face samples. The largest distances are then refined: the faces holding the
+// worst samples are resampled much more densely until the maximum stops growing (by less than
+// `refine_tolerance`), so refining further would not change the reported Hausdorff distance.
+// Parallel with TBB; every sample's result is stored by index and reduced in order, so the answer is
+// identical for any thread count.
+#include <lodkit/mesh.h>
+
+#include <optional>
+
+namespace lodkit {
+
+struct CompareOptions {
+  /// Face samples per direction; default 10 x the face count of the larger mesh (at least 10,000).
+  std::optional<long long> samples{};
+  /// Rounds of re-sampling around the worst distances (0 = none).
+  int refine_rounds = 4;
+  /// Stop refining when a round raises the maximum by less than this fraction.
+  double refine_tolerance = 1e-3;
+};
+
+struct DirectedDistance {
+  double max = 0.0;   ///< one-sided Hausdorff distance
+  double mean = 0.0;  ///< area-weighted mean distance
+  double rms = 0.0;   ///< area-weighted root mean square distance
+  double normal_deviation_mean_deg = 0.0;  ///< angle between the two surfaces' face normals
+  double normal_deviation_max_deg = 0.0;
+  long long samples = 0;
+};
+
+struct Comparison {
+  DirectedDistance a_to_b;  ///< samples on A, distances to B
+  DirectedDistance b_to_a;
+  double hausdorff = 0.0;   ///< max of the two one-sided distances
+  double mean = 0.0;        ///< average of the two means
+  double rms = 0.0;         ///< sqrt of the average of the two mean squares
+  double diagonal = 0.0;    ///< bounding-box diagonal of A: the reference for percentages
+  double percent(double value) const { return diagonal > 0 ? 100.0 * value / diagonal : 0.0; }
+};
+
+/// \throw Error if either mesh has no faces.
+Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options = {});
+
+}  // namespace lodkit

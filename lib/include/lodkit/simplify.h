@@ -1,0 +1,104 @@
+#pragma once
+// simplify(): edge-collapse simplification with a choice of cost.
+//
+// One engine (lib/src/simplify/engine.cpp) keeps a priority queue of candidate collapses u -> v
+// over vertices welded by position. Each candidate is checked once when scored and again when it is
+// taken: the link condition (the result stays a 2-manifold with the same genus, components and
+// boundary loops), no face normal turning by more than `max_normal_change_deg`, no new sliver below
+// `min_triangle_quality`, boundary vertices move only along the boundary, and attribute seams
+// (vertices split by differing normals/UVs/colours) collapse only along the seam, so no seam is ever
+// torn or merged. Vertices on non-manifold edges or fans are locked, not rejected, so dirty meshes
+// still simplify. After a collapse only the edges around the kept vertex are re-scored.
+//
+// Costs:
+//   Quadric     Garland & Heckbert, "Surface simplification using quadric error metrics" (1997):
+//               area-weighted plane quadrics plus boundary constraint planes; optimal placement by a
+//               3x3 eigen-solve that falls back to the best of endpoints and midpoint.
+//   Hoppe       Hoppe, "Progressive meshes" (1996): E = E_dist + E_spring over points sampled on the
+//               original surface, each collapse scored by locally optimising the new position.
+//   EdgeLength  the naive |v1 - v2| / |n1 . n2| priority with endpoint/midpoint placement; with
+//               topology checks off it breaks models apart, as the literature warns.
+//
+// Every collapse can be recorded so that it can be undone exactly (progressive meshes).
+#include <lodkit/mesh.h>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lodkit {
+
+enum class SimplifyMethod { Quadric, Hoppe, EdgeLength };
+enum class Placement { Optimal, Endpoint, Midpoint };
+
+/// Why simplification stopped.
+enum class StopReason {
+  TargetReached,    ///< the face target (from target_faces or target_ratio)
+  ErrorLimit,       ///< every remaining collapse would exceed max_error
+  NoLegalCollapse,  ///< every remaining collapse is illegal (locked vertices, topology, flips)
+};
+
+struct SimplifyOptions {
+  SimplifyMethod method = SimplifyMethod::Quadric;
+  Placement placement = Placement::Optimal;
+  /// Stop at this many faces (or the nearest count below it that the mesh allows).
+  std::optional<Index> target_faces{};
+  /// Stop at this fraction of the input's faces (0..1).
+  std::optional<double> target_ratio{};
+  /// Never perform a collapse whose error estimate (a distance, see SimplifyResult::error) exceeds this.
+  std::optional<double> max_error{};
+
+  bool preserve_topology = true;   ///< link condition and flip checks (off only to show failure)
+  bool lock_boundary = false;      ///< boundary vertices never move or disappear
+  double boundary_weight = 10.0;   ///< weight of boundary constraint planes (quadric); higher keeps borders
+  double max_normal_change_deg = 90.0;  ///< a face may not turn further than this in one collapse
+  double min_triangle_quality = 0.02;   ///< 4 sqrt(3) area / sum of squared edges, for new triangles
+
+  /// Hoppe: random points sampled per input face (besides the vertices), and the seed.
+  double hoppe_points_per_face = 1.0;
+  std::uint64_t seed = 1;
+
+  bool record_collapses = false;
+  /// Called with the fraction done (0..1), at most about 100 times.
+  std::function<void(double)> progress{};
+};
+
+/// One collapse u -> v, enough to undo it exactly.
+struct CollapseRecord {
+  Index removed;                    ///< the point (welded vertex) that disappears
+  Index kept;                       ///< the point it merges into
+  Eigen::Vector3d kept_before;      ///< kept's position before the collapse
+  Eigen::Vector3d kept_after;       ///< and after
+  double error;                     ///< error estimate of the collapse
+  std::vector<Index> removed_faces;                      ///< faces that vanish
+  std::vector<std::array<Index, 3>> changed_corners;     ///< (face, corner, old vertex)
+};
+
+struct SimplifyResult {
+  Mesh mesh;
+  Index faces_in = 0, faces_out = 0, vertices_in = 0, vertices_out = 0;
+  Index target_faces = 0;           ///< the face target aimed at (faces_in when none)
+  Index collapses = 0;
+  /// The largest error estimate of any collapse performed: for Quadric and EdgeLength the RMS distance
+  /// from the merged vertex to the planes of the faces it replaced (sqrt of quadric error / area);
+  /// for Hoppe the RMS distance of the sampled points to the mesh.
+  double error = 0.0;
+  StopReason reason = StopReason::TargetReached;
+  std::string reason_text;          ///< one human sentence: why it stopped where it did
+  Index locked_vertices = 0;        ///< on non-manifold edges or fans (or the boundary when locked)
+  Index dropped_degenerate_faces = 0;
+  double seconds = 0.0;
+  std::vector<Index> vertex_origin; ///< for each output vertex, its input vertex
+  std::vector<CollapseRecord> records;
+};
+
+/// \throw Error for invalid options (ratio outside 0..1, negative targets) or an invalid mesh.
+SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options = {});
+
+std::string to_string(SimplifyMethod method);
+std::optional<SimplifyMethod> parse_method(const std::string& name);
+
+}  // namespace lodkit

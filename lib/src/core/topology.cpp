@@ -1,0 +1,66 @@
+#include "core/topology.h"
+
+#include <algorithm>
+
+#include "core/union_find.h"
+
+namespace lodkit::detail {
+
+std::vector<EdgeUse> classify_edges(const std::vector<std::array<Index, 3>>& faces) {
+  struct HalfEdge {
+    Index lo, hi;
+    bool forward;
+  };
+  std::vector<HalfEdge> half;
+  half.reserve(3 * faces.size());
+  for (const auto& f : faces)
+    for (int k = 0; k < 3; ++k) {
+      const Index a = f[k], b = f[(k + 1) % 3];
+      half.push_back({std::min(a, b), std::max(a, b), a < b});
+    }
+  std::sort(half.begin(), half.end(),
+            [](const HalfEdge& x, const HalfEdge& y) { return x.lo != y.lo ? x.lo < y.lo : x.hi < y.hi; });
+  std::vector<EdgeUse> edges;
+  edges.reserve(half.size() / 2 + 1);
+  for (std::size_t i = 0; i < half.size();) {
+    std::size_t j = i;
+    while (j < half.size() && half[j].lo == half[i].lo && half[j].hi == half[i].hi) ++j;
+    const int uses = static_cast<int>(j - i);
+    edges.push_back({half[i].lo, half[i].hi, uses, uses != 2 || half[i].forward != half[i + 1].forward});
+    i = j;
+  }
+  return edges;
+}
+
+std::vector<char> non_manifold_fans(Index num_points, const std::vector<std::array<Index, 3>>& faces) {
+  // Link each point's neighbours through its faces (a face joins its two other corners); a manifold
+  // point's neighbours form one connected piece.
+  std::vector<Index> start(static_cast<std::size_t>(num_points) + 1, 0);
+  for (const auto& f : faces)
+    for (Index v : f) ++start[v + 1];
+  for (Index v = 0; v < num_points; ++v) start[v + 1] += start[v];
+  std::vector<std::pair<Index, Index>> links(start.back());
+  std::vector<Index> fill(start.begin(), start.end() - 1);
+  for (const auto& f : faces)
+    for (int k = 0; k < 3; ++k) links[fill[f[k]]++] = {f[(k + 1) % 3], f[(k + 2) % 3]};
+
+  std::vector<char> bad(static_cast<std::size_t>(num_points), 0);
+  std::vector<Index> local;
+  for (Index v = 0; v < num_points; ++v) {
+    const Index b = start[v], e = start[v + 1];
+    if (e - b < 2) continue;
+    local.clear();
+    for (Index i = b; i < e; ++i) local.push_back(links[i].first), local.push_back(links[i].second);
+    std::sort(local.begin(), local.end());
+    local.erase(std::unique(local.begin(), local.end()), local.end());
+    UnionFind uf(local.size());
+    auto id = [&](Index x) { return static_cast<int>(std::lower_bound(local.begin(), local.end(), x) - local.begin()); };
+    std::size_t pieces = local.size();
+    for (Index i = b; i < e; ++i)
+      if (uf.unite(id(links[i].first), id(links[i].second))) --pieces;
+    bad[v] = pieces > 1;
+  }
+  return bad;
+}
+
+}  // namespace lodkit::detail

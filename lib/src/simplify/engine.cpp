@@ -1,0 +1,544 @@
+#include <lodkit/error.h>
+#include <lodkit/simplify.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+#include <numbers>
+
+#include "core/topology.h"
+#include "simplify/engine.h"
+
+namespace lodkit {
+namespace detail {
+
+const std::vector<Index>& EngineState::faces_of(Index p) { return point_faces[p]; }
+
+namespace {
+
+// Why a candidate collapse was refused. The final report counts these over the edges left.
+enum class Rejection { None, Locked, Topology, Boundary, Seam, Flip, Sliver, ErrorLimit, Cost, kCount };
+
+struct HeapEntry {
+  double cost;
+  Index u, v;
+  std::uint32_t version_u, version_v;
+  // std::priority_queue is a max-heap: invert, and break ties by index so runs are deterministic.
+  bool operator<(const HeapEntry& o) const {
+    if (cost != o.cost) return cost > o.cost;
+    if (u != o.u) return u > o.u;
+    return v > o.v;
+  }
+};
+
+class Engine {
+ public:
+  Engine(const Mesh& mesh, const SimplifyOptions& options) : o_(options) {
+    s_.input = &mesh;
+    setup(mesh);
+    switch (o_.method) {
+      case SimplifyMethod::Quadric: cost_ = make_quadric_cost(o_); break;
+      case SimplifyMethod::EdgeLength: cost_ = make_edge_length_cost(o_); break;
+      case SimplifyMethod::Hoppe: cost_ = make_hoppe_cost(o_, s_); break;
+    }
+    cos_max_turn_ = std::cos(o_.max_normal_change_deg * std::numbers::pi / 180.0);
+  }
+
+  SimplifyResult run(Index target);
+
+ private:
+  void setup(const Mesh& mesh);
+  // Checks are split by cost: the cheap ones (flags, shared faces, seam wedges) decide where the
+  // surviving vertex may go and run whenever a candidate is scored; the link condition and the
+  // geometric checks run once, when a candidate reaches the top of the queue.
+  Rejection structure(Index u, Index v, Freedom& freedom, bool link_condition);
+  Rejection geometry(Index u, Index v, const Eigen::Vector3d& p);
+  Rejection evaluate(Index u, Index v, Candidate& c, bool full);
+  void push_edge(Index a, Index b);
+  void collapse(Index u, Index v, const Candidate& c);
+  void neighbours(Index p, std::vector<Index>& out);
+  std::string stop_report(Index target);
+
+  SimplifyOptions o_;
+  EngineState s_;
+  std::unique_ptr<CostModel> cost_;
+  std::vector<HeapEntry> heap_;
+  std::vector<std::uint32_t> version_;
+  double cos_max_turn_ = 0;
+  // Scratch, reused across calls; the wedge map is valid for the last structure() call.
+  std::vector<Index> shared_, ring_u_, ring_v_, ring_tmp_;
+  std::pair<Index, Index> wedge_map_[2];
+  int wedge_map_size_ = 0;
+  // Result bookkeeping.
+  double max_error_ = 0;
+  Index collapses_ = 0, locked_ = 0, dropped_ = 0;
+  std::vector<CollapseRecord> records_;
+};
+
+void Engine::setup(const Mesh& mesh) {
+  const Index nv = mesh.num_vertices();
+  // Points: one per distinct position.
+  const Eigen::VectorX<Index> cls = position_classes(mesh);
+  s_.point_of.assign(static_cast<std::size_t>(nv), -1);
+  std::vector<Index> point_of_class(static_cast<std::size_t>(nv), -1);
+  Index points = 0;
+  for (Index v = 0; v < nv; ++v) {
+    Index& p = point_of_class[cls[v]];
+    if (p < 0) {
+      p = points++;
+      s_.position.push_back(mesh.positions.row(v).transpose());
+    }
+    s_.point_of[v] = p;
+  }
+  s_.quadric.assign(static_cast<std::size_t>(points), {});
+  s_.flags.assign(static_cast<std::size_t>(points), 0);
+  s_.point_faces.assign(static_cast<std::size_t>(points), {});
+  version_.assign(static_cast<std::size_t>(points), 0);
+
+  // Faces; a face whose corners are not three distinct points cannot take part and is dropped.
+  std::vector<std::array<Index, 3>> point_faces;
+  for (Index f = 0; f < mesh.num_faces(); ++f) {
+    const std::array<Index, 3> w{mesh.triangles(f, 0), mesh.triangles(f, 1), mesh.triangles(f, 2)};
+    const std::array<Index, 3> p{s_.point_of[w[0]], s_.point_of[w[1]], s_.point_of[w[2]]};
+    s_.face.push_back(w);
+    const Eigen::Vector3d n0 = (mesh.positions.row(w[1]) - mesh.positions.row(w[0]))
+                                   .cross(mesh.positions.row(w[2]) - mesh.positions.row(w[0]))
+                                   .transpose();
+    s_.face_normal0.push_back(n0.norm() > 0 ? Eigen::Vector3f(n0.normalized().cast<float>()) : Eigen::Vector3f::Zero());
+    if (p[0] == p[1] || p[1] == p[2] || p[0] == p[2]) {
+      s_.face_dead.push_back(1);
+      ++dropped_;
+      continue;
+    }
+    s_.face_dead.push_back(0);
+    point_faces.push_back(p);
+    for (Index q : p) s_.point_faces[q].push_back(f);
+  }
+  s_.alive_faces = static_cast<Index>(point_faces.size());
+
+  // Boundaries and non-manifold parts.
+  for (const EdgeUse& e : classify_edges(point_faces)) {
+    if (e.faces == 1) s_.flags[e.lo] |= kBorder, s_.flags[e.hi] |= kBorder;
+    if (e.faces > 2 || !e.consistent) s_.flags[e.lo] |= kLocked, s_.flags[e.hi] |= kLocked;
+  }
+  const std::vector<char> fans = non_manifold_fans(points, point_faces);
+  for (Index p = 0; p < points; ++p) {
+    if (fans[p]) s_.flags[p] |= kLocked;
+    if (o_.lock_boundary && (s_.flags[p] & kBorder)) s_.flags[p] |= kLocked;
+    locked_ += (s_.flags[p] & kLocked) != 0;
+  }
+  // Seams: a point whose faces use more than one wedge.
+  for (Index p = 0; p < points; ++p) {
+    Index first = -1;
+    for (Index f : s_.point_faces[p])
+      for (int k = 0; k < 3; ++k)
+        if (s_.corner_point(f, k) == p) {
+          if (first < 0) first = s_.face[f][k];
+          else if (s_.face[f][k] != first) s_.flags[p] |= kSeam;
+        }
+  }
+
+  // Quadrics: area-weighted face planes, and boundary constraint planes through each border edge,
+  // perpendicular to its face, weighted by the squared edge length.
+  for (Index f = 0; f < mesh.num_faces(); ++f) {
+    if (s_.face_dead[f]) continue;
+    const Index a = s_.corner_point(f, 0), b = s_.corner_point(f, 1), c = s_.corner_point(f, 2);
+    const Eigen::Vector3d n2 = (s_.position[b] - s_.position[a]).cross(s_.position[c] - s_.position[a]);
+    const double len = n2.norm();
+    if (!(len > 0)) continue;
+    const Eigen::Vector3d n = n2 / len;
+    const Quadric q = Quadric::plane(n, -n.dot(s_.position[a]), 0.5 * len);
+    s_.quadric[a] += q, s_.quadric[b] += q, s_.quadric[c] += q;
+    for (int k = 0; k < 3; ++k) {
+      const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
+      if (!(s_.has(p0, kBorder) && s_.has(p1, kBorder))) continue;
+      int uses = 0;  // is p0-p1 a boundary edge (one face)?
+      for (Index g : s_.point_faces[p0])
+        for (int j = 0; j < 3; ++j) uses += s_.corner_point(g, j) == p1;
+      if (uses != 1) continue;
+      const Eigen::Vector3d edge = s_.position[p1] - s_.position[p0];
+      const Eigen::Vector3d m = edge.cross(n).normalized();
+      if (!m.allFinite()) continue;
+      const Quadric bq = Quadric::plane(m, -m.dot(s_.position[p0]), o_.boundary_weight * edge.squaredNorm());
+      s_.quadric[p0] += bq, s_.quadric[p1] += bq;
+    }
+  }
+}
+
+void Engine::neighbours(Index p, std::vector<Index>& out) {
+  out.clear();
+  for (Index f : s_.faces_of(p))
+    for (int k = 0; k < 3; ++k) {
+      const Index q = s_.corner_point(f, k);
+      if (q != p) out.push_back(q);
+    }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condition) {
+  if (s_.has(u, kRemoved) || s_.has(v, kRemoved)) return Rejection::Topology;
+  if (s_.has(u, kLocked)) return Rejection::Locked;
+  const std::vector<Index>& fu = s_.faces_of(u);
+  shared_.clear();
+  for (Index f : fu)
+    for (int k = 0; k < 3; ++k)
+      if (s_.corner_point(f, k) == v) shared_.push_back(f);
+  if (shared_.empty() || shared_.size() > 2) return Rejection::Topology;
+  const bool border_edge = shared_.size() == 1;
+  if (s_.has(u, kBorder) && !border_edge) return Rejection::Boundary;  // u would leave its boundary
+
+  // Wedges: each wedge of u maps to v's wedge in the same vanishing face. Every wedge u still uses
+  // must be mapped, and two wedges may not merge: seams neither tear nor fuse.
+  auto wedge_at = [&](Index f, Index p) {
+    for (int k = 0; k < 3; ++k)
+      if (s_.corner_point(f, k) == p) return s_.face[f][k];
+    return Index(-1);
+  };
+  wedge_map_size_ = 0;
+  for (Index f : shared_) {
+    const Index wu = wedge_at(f, u), wv = wedge_at(f, v);
+    bool known = false;
+    for (int i = 0; i < wedge_map_size_; ++i) {
+      if (wedge_map_[i].first == wu) {
+        if (wedge_map_[i].second != wv) return Rejection::Seam;
+        known = true;
+      } else if (wedge_map_[i].second == wv) {
+        return Rejection::Seam;
+      }
+    }
+    if (!known) wedge_map_[wedge_map_size_++] = {wu, wv};
+  }
+  for (Index f : fu) {
+    const Index wu = wedge_at(f, u);
+    bool mapped = false;
+    for (int i = 0; i < wedge_map_size_; ++i) mapped |= wedge_map_[i].first == wu;
+    if (!mapped) return Rejection::Seam;
+  }
+
+  if (o_.preserve_topology && link_condition) {
+    // Link condition: the only common neighbours of u and v are the apexes of the vanishing faces.
+    neighbours(u, ring_u_);
+    neighbours(v, ring_v_);
+    ring_tmp_.clear();
+    std::set_intersection(ring_u_.begin(), ring_u_.end(), ring_v_.begin(), ring_v_.end(), std::back_inserter(ring_tmp_));
+    if (ring_tmp_.size() != shared_.size()) return Rejection::Topology;
+    // v keeps enough neighbours (a tetrahedron cannot lose a vertex).
+    const std::size_t degree = ring_u_.size() + ring_v_.size() - ring_tmp_.size() - 2;
+    if (degree < (s_.has(v, kBorder) ? 2u : 3u)) return Rejection::Topology;
+    if (border_edge) {
+      // A boundary loop of three edges (u v w) would collapse to nothing.
+      Index w = -1;
+      for (int k = 0; k < 3; ++k)
+        if (s_.corner_point(shared_[0], k) != u && s_.corner_point(shared_[0], k) != v) w = s_.corner_point(shared_[0], k);
+      int uw = 0, vw = 0;
+      for (Index f : fu)
+        for (int k = 0; k < 3; ++k) uw += s_.corner_point(f, k) == w;
+      for (Index f : s_.faces_of(v))
+        for (int k = 0; k < 3; ++k) vw += s_.corner_point(f, k) == w;
+      if (uw == 1 && vw == 1) return Rejection::Topology;
+    }
+  }
+
+  const bool u_constrained = s_.has(u, kBorder) || s_.has(u, kSeam);
+  const bool v_constrained = s_.has(v, kBorder) || s_.has(v, kSeam) || s_.has(v, kLocked);
+  if (u_constrained && !v_constrained) return s_.has(u, kBorder) ? Rejection::Boundary : Rejection::Seam;
+  const bool fixed = s_.has(v, kLocked) || (s_.has(v, kBorder) && !s_.has(u, kBorder)) ||
+                     (s_.has(v, kSeam) && !s_.has(u, kSeam));
+  freedom = fixed ? Freedom::AtKept : Freedom::Free;
+  return Rejection::None;
+}
+
+Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
+  if (!o_.preserve_topology) return Rejection::None;
+  constexpr double kQualityScale = 6.928203230275509;  // 4 sqrt(3): equilateral = 1
+  auto check = [&](Index moved, Index other) {
+    for (Index f : s_.faces_of(moved)) {
+      Eigen::Vector3d before[3], after[3];
+      bool has_other = false;
+      for (int k = 0; k < 3; ++k) {
+        const Index q = s_.corner_point(f, k);
+        has_other |= q == other;
+        before[k] = after[k] = s_.position[q];
+        if (q == moved) after[k] = p;
+      }
+      if (has_other) continue;  // vanishes
+      const Eigen::Vector3d n0 = (before[1] - before[0]).cross(before[2] - before[0]);
+      const Eigen::Vector3d n1 = (after[1] - after[0]).cross(after[2] - after[0]);
+      const double l0 = n0.norm(), l1 = n1.norm();
+      if (!(l1 > 0)) return Rejection::Sliver;
+      // Against the face's last shape, and against its input shape: small turns must not add up to
+      // a flip over many collapses.
+      if (l0 > 0 && n1.dot(n0) < cos_max_turn_ * l0 * l1) return Rejection::Flip;
+      if (n1.dot(s_.face_normal0[f].cast<double>()) < cos_max_turn_ * l1) return Rejection::Flip;
+      auto quality = [&](const Eigen::Vector3d* t, double twice_area) {
+        const double sum = (t[1] - t[0]).squaredNorm() + (t[2] - t[1]).squaredNorm() + (t[0] - t[2]).squaredNorm();
+        return sum > 0 ? kQualityScale * 0.5 * twice_area / sum : 0.0;
+      };
+      const double q1 = quality(after, l1);
+      if (q1 < o_.min_triangle_quality && q1 < quality(before, l0)) return Rejection::Sliver;
+    }
+    return Rejection::None;
+  };
+  if (const Rejection r = check(u, v); r != Rejection::None) return r;
+  if (p != s_.position[v]) return check(v, u);
+  return Rejection::None;
+}
+
+Rejection Engine::evaluate(Index u, Index v, Candidate& c, bool full) {
+  Freedom freedom;
+  if (const Rejection r = structure(u, v, freedom, full); r != Rejection::None) return r;
+  if (!cost_->score(s_, u, v, freedom, c)) return Rejection::Cost;
+  if (o_.max_error && c.error > *o_.max_error) return Rejection::ErrorLimit;
+  return full ? geometry(u, v, c.position) : Rejection::None;
+}
+
+void Engine::push_edge(Index a, Index b) {
+  Candidate ca, cb;
+  const bool ok_a = evaluate(a, b, ca, false) == Rejection::None;
+  const bool ok_b = evaluate(b, a, cb, false) == Rejection::None;
+  if (!ok_a && !ok_b) return;
+  const bool use_a = ok_a && (!ok_b || ca.cost <= cb.cost);
+  const Index u = use_a ? a : b, v = use_a ? b : a;
+  heap_.push_back({use_a ? ca.cost : cb.cost, u, v, version_[u], version_[v]});
+  std::push_heap(heap_.begin(), heap_.end());
+}
+
+void Engine::collapse(Index u, Index v, const Candidate& c) {
+  CollapseRecord* rec = nullptr;
+  if (o_.record_collapses) {
+    records_.push_back({u, v, s_.position[v], c.position, c.error, {}, {}});
+    rec = &records_.back();
+  }
+  for (Index f : shared_) {
+    s_.face_dead[f] = 1;
+    --s_.alive_faces;
+    if (rec) rec->removed_faces.push_back(f);
+  }
+  // Keep every point's face list free of dead faces: only u, v and the apexes held them.
+  auto prune = [&](Index p) {
+    auto& list = s_.point_faces[p];
+    list.erase(std::remove_if(list.begin(), list.end(), [&](Index f) { return s_.face_dead[f] != 0; }), list.end());
+  };
+  for (Index f : shared_)
+    for (int k = 0; k < 3; ++k) {
+      const Index q = s_.corner_point(f, k);
+      if (q != u) prune(q);
+    }
+  prune(u);
+  for (Index f : s_.faces_of(u)) {
+    for (int k = 0; k < 3; ++k) {
+      if (s_.corner_point(f, k) != u) continue;
+      const Index old = s_.face[f][k];
+      for (int i = 0; i < wedge_map_size_; ++i)
+        if (wedge_map_[i].first == old) s_.face[f][k] = wedge_map_[i].second;
+      if (rec) rec->changed_corners.push_back({f, k, old});
+    }
+    s_.point_faces[v].push_back(f);
+  }
+  s_.point_faces[u].clear();
+  s_.position[v] = c.position;
+  s_.quadric[v] += s_.quadric[u];
+  s_.flags[u] |= kRemoved;
+  ++version_[u];
+  ++version_[v];
+  max_error_ = std::max(max_error_, c.error);
+  ++collapses_;
+  cost_->collapsed(s_, u, v);
+
+  std::vector<Index> ring;
+  neighbours(v, ring);
+  if (cost_->wide_update()) {
+    // The cost of every edge touching v's neighbourhood may have changed.
+    for (Index w : ring) ++version_[w];
+    std::vector<Index> ring_w;
+    for (Index w : ring) {
+      neighbours(w, ring_w);
+      for (Index x : ring_w)
+        if (x != v && (x > w || std::find(ring.begin(), ring.end(), x) == ring.end())) push_edge(w, x);
+    }
+  }
+  for (Index w : ring) push_edge(v, w);
+}
+
+std::string Engine::stop_report(Index target) {
+  // Classify every remaining edge by why it cannot collapse.
+  std::size_t counts[static_cast<int>(Rejection::kCount)] = {};
+  std::vector<Index> ring;
+  Index remaining = 0;
+  for (Index p = 0; p < static_cast<Index>(s_.position.size()); ++p) {
+    if (s_.has(p, kRemoved)) continue;
+    neighbours(p, ring);
+    for (Index q : ring) {
+      if (q < p) continue;
+      ++remaining;
+      Candidate c;
+      const Rejection a = evaluate(p, q, c, true), b = evaluate(q, p, c, true);
+      // Report the more specific of the two directions' reasons.
+      counts[static_cast<int>(std::max(a, b))]++;
+    }
+  }
+  const char* names[] = {"", "locked (non-manifold or locked boundary) vertices", "topology (link condition)",
+                         "boundary rules", "attribute seams", "face flips", "slivers", "the error limit", "the cost"};
+  std::string why;
+  for (int r = 1; r < static_cast<int>(Rejection::kCount); ++r)
+    if (counts[r]) why += fmt::format("{}{} blocked by {}", why.empty() ? "" : ", ", counts[r], names[r]);
+  return fmt::format("stopped at {} faces, above the target of {}: none of the {} remaining edges can collapse "
+                     "({}); {} vertices are locked",
+                     s_.alive_faces, target, remaining, why.empty() ? "no edges left" : why, locked_);
+}
+
+SimplifyResult Engine::run(Index target) {
+  const auto start = std::chrono::steady_clock::now();
+  SimplifyResult result;
+  result.faces_in = s_.input->num_faces();
+  result.vertices_in = s_.input->num_vertices();
+  result.target_faces = target;
+
+  // Every edge once, scored in both directions.
+  {
+    std::vector<std::array<Index, 3>> faces;
+    for (std::size_t f = 0; f < s_.face.size(); ++f)
+      if (!s_.face_dead[f])
+        faces.push_back({s_.corner_point(Index(f), 0), s_.corner_point(Index(f), 1), s_.corner_point(Index(f), 2)});
+    heap_.reserve(faces.size() * 3);
+    for (const EdgeUse& e : classify_edges(faces)) {
+      Candidate ca, cb;
+      if (e.faces > 2) continue;
+      push_edge(e.lo, e.hi);
+    }
+  }
+
+  const Index to_remove = std::max<Index>(1, s_.alive_faces - target);
+  Index next_report = 0;
+  bool error_blocked = false;
+  // A two-face collapse kept back when only one face is left to remove.
+  std::optional<std::pair<Index, Index>> deferred;
+  Candidate c;
+  while (s_.alive_faces > target && !heap_.empty()) {
+    std::pop_heap(heap_.begin(), heap_.end());
+    const HeapEntry e = heap_.back();
+    heap_.pop_back();
+    if (e.version_u != version_[e.u] || e.version_v != version_[e.v]) continue;  // stale
+    if (evaluate(e.u, e.v, c, true) != Rejection::None) {
+      // The best direction is illegal now; the other one may still be worth queueing.
+      Candidate r;
+      if (evaluate(e.v, e.u, r, true) == Rejection::None) {
+        heap_.push_back({r.cost, e.v, e.u, version_[e.v], version_[e.u]});
+        std::push_heap(heap_.begin(), heap_.end());
+      }
+      continue;
+    }
+    if (s_.alive_faces - static_cast<Index>(shared_.size()) < target) {
+      if (!deferred) deferred = {e.u, e.v};
+      continue;
+    }
+    collapse(e.u, e.v, c);
+    if (o_.progress && result.faces_in - s_.alive_faces >= next_report) {
+      o_.progress(std::min(1.0, double(result.faces_in - s_.alive_faces) / to_remove));
+      next_report += std::max<Index>(1, to_remove / 100);
+    }
+  }
+  if (s_.alive_faces > target && deferred && evaluate(deferred->first, deferred->second, c, true) == Rejection::None) {
+    // Nothing removes exactly one face: take the best two-face collapse and land one below the target.
+    collapse(deferred->first, deferred->second, c);
+  }
+
+  if (s_.alive_faces <= target) {
+    result.reason = StopReason::TargetReached;
+    result.reason_text = fmt::format("reached the target: {} faces (target {})", s_.alive_faces, target);
+  } else {
+    result.reason_text = stop_report(target);
+    error_blocked = o_.max_error && result.reason_text.find("the error limit") != std::string::npos;
+    result.reason = error_blocked ? StopReason::ErrorLimit : StopReason::NoLegalCollapse;
+  }
+
+  // Output: surviving faces in input order; surviving wedges in input order with their point's position.
+  const Mesh& in = *s_.input;
+  std::vector<Index> new_index(static_cast<std::size_t>(in.num_vertices()), -1);
+  Index nf = 0;
+  for (std::size_t f = 0; f < s_.face.size(); ++f)
+    if (!s_.face_dead[f]) {
+      ++nf;
+      for (Index w : s_.face[f]) new_index[w] = 0;
+    }
+  Index nv = 0;
+  for (Index w = 0; w < in.num_vertices(); ++w)
+    if (new_index[w] == 0) new_index[w] = nv++, result.vertex_origin.push_back(w);
+  Mesh& out = result.mesh;
+  out.positions.resize(nv, 3);
+  out.triangles.resize(nf, 3);
+  const Attributes& a = in.attributes;
+  if (in.has_normals()) out.attributes.normals.resize(nv, 3);
+  if (in.has_uvs()) out.attributes.uvs.resize(nv, 2);
+  if (in.has_colours()) out.attributes.colours.resize(nv, 4);
+  if (in.has_face_colours()) out.attributes.face_colours.resize(nf, 4);
+  for (Index i = 0; i < nv; ++i) {
+    const Index w = result.vertex_origin[i];
+    out.positions.row(i) = s_.position[s_.point_of[w]].transpose();
+    if (in.has_normals()) out.attributes.normals.row(i) = a.normals.row(w);
+    if (in.has_uvs()) out.attributes.uvs.row(i) = a.uvs.row(w);
+    if (in.has_colours()) out.attributes.colours.row(i) = a.colours.row(w);
+  }
+  Index row = 0;
+  for (std::size_t f = 0; f < s_.face.size(); ++f) {
+    if (s_.face_dead[f]) continue;
+    for (int k = 0; k < 3; ++k) out.triangles(row, k) = new_index[s_.face[f][k]];
+    if (in.has_face_colours()) out.attributes.face_colours.row(row) = a.face_colours.row(static_cast<Index>(f));
+    ++row;
+  }
+  result.faces_out = nf;
+  result.vertices_out = nv;
+  result.collapses = collapses_;
+  result.error = max_error_;
+  result.locked_vertices = locked_;
+  result.dropped_degenerate_faces = dropped_;
+  result.records = std::move(records_);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (o_.progress) o_.progress(1.0);
+  return result;
+}
+
+}  // namespace
+}  // namespace detail
+
+SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(mesh, "simplify");
+  if (options.target_ratio && !(*options.target_ratio >= 0 && *options.target_ratio <= 1))
+    throw Error(fmt::format("simplify: ratio must be between 0 and 1, got {}", *options.target_ratio));
+  if (options.target_faces && *options.target_faces < 0)
+    throw Error(fmt::format("simplify: face target must not be negative, got {}", *options.target_faces));
+  if (options.max_error && !(*options.max_error >= 0))
+    throw Error(fmt::format("simplify: max error must not be negative, got {}", *options.max_error));
+  if (!(options.max_normal_change_deg > 0 && options.max_normal_change_deg <= 180))
+    throw Error("simplify: max normal change must be in (0, 180] degrees");
+  Index target = 0;
+  if (!options.target_faces && !options.target_ratio && !options.max_error) target = mesh.num_faces() / 2;
+  if (options.target_faces) target = std::max(target, *options.target_faces);
+  if (options.target_ratio)
+    target = std::max(target, static_cast<Index>(std::llround(*options.target_ratio * mesh.num_faces())));
+  detail::Engine engine(mesh, options);
+  SimplifyResult r = engine.run(target);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+std::string to_string(SimplifyMethod method) {
+  switch (method) {
+    case SimplifyMethod::Quadric: return "quadric";
+    case SimplifyMethod::Hoppe: return "hoppe";
+    case SimplifyMethod::EdgeLength: return "edge-length";
+  }
+  return "?";
+}
+
+std::optional<SimplifyMethod> parse_method(const std::string& name) {
+  if (name == "quadric") return SimplifyMethod::Quadric;
+  if (name == "hoppe") return SimplifyMethod::Hoppe;
+  if (name == "edge-length") return SimplifyMethod::EdgeLength;
+  return std::nullopt;
+}
+
+}  // namespace lodkit

@@ -1,0 +1,76 @@
+#pragma once
+// The collapse engine's state and the interface its costs plug into (not public API).
+//
+//        w0                     Collapse u -> v: u disappears, v survives (possibly moved to p).
+//       /  \                    The faces on edge uv (one on a boundary) vanish; every other face
+//      /    \                   of u gets v in u's place. A vertex of the input is a "wedge"; wedges
+//     u ---- v                  with one position are one "point", and the engine works on points,
+//      \    /                   rewriting wedges so that attribute seams stay intact.
+//       \  /
+//        w1
+#include <lodkit/simplify.h>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "simplify/quadric.h"
+
+namespace lodkit::detail {
+
+enum PointFlag : std::uint8_t {
+  kBorder = 1,   ///< on an open boundary
+  kSeam = 2,     ///< its faces use more than one wedge (attribute discontinuity)
+  kLocked = 4,   ///< never removed, never moved (non-manifold, or a locked boundary)
+  kRemoved = 8,
+};
+
+struct EngineState {
+  const Mesh* input = nullptr;
+  std::vector<Index> point_of;                  ///< wedge -> point
+  std::vector<Eigen::Vector3d> position;        ///< per point
+  std::vector<Quadric> quadric;                 ///< per point: planes of its faces (and boundary)
+  std::vector<std::uint8_t> flags;              ///< per point: PointFlag bits
+  std::vector<std::vector<Index>> point_faces;  ///< per point: incident faces (dead ones pruned lazily)
+  std::vector<std::array<Index, 3>> face;       ///< wedges of each face
+  std::vector<std::uint8_t> face_dead;
+  std::vector<Eigen::Vector3f> face_normal0;    ///< each face's unit normal in the input
+  Index alive_faces = 0;
+
+  Index corner_point(Index f, int k) const { return point_of[face[f][k]]; }
+  bool has(Index p, PointFlag flag) const { return flags[p] & flag; }
+  /// Alive faces of point p (prunes dead ones from its list).
+  const std::vector<Index>& faces_of(Index p);
+};
+
+/// Where the surviving vertex may go.
+enum class Freedom { Free, AtKept };
+
+struct Candidate {
+  Eigen::Vector3d position;
+  double cost = 0;   ///< priority (lower first)
+  double error = 0;  ///< distance-like estimate reported to the user
+};
+
+class CostModel {
+ public:
+  virtual ~CostModel() = default;
+  /// Scores collapse u -> v. Fills `out`; returns false if the cost refuses the collapse.
+  virtual bool score(EngineState& s, Index u, Index v, Freedom freedom, Candidate& out) = 0;
+  /// Called after u -> v was performed; `faces` are the faces now around v.
+  virtual void collapsed(EngineState&, Index /*u*/, Index /*v*/) {}
+  /// True if a collapse changes the costs of edges around v's neighbours too (not just v's edges).
+  virtual bool wide_update() const { return false; }
+};
+
+std::unique_ptr<CostModel> make_quadric_cost(const SimplifyOptions& options);
+std::unique_ptr<CostModel> make_edge_length_cost(const SimplifyOptions& options);
+std::unique_ptr<CostModel> make_hoppe_cost(const SimplifyOptions& options, const EngineState& state);
+
+/// The quadric error of placing the merged u, v at p, as a distance: sqrt(Q(p) / area).
+inline double quadric_distance(const Quadric& q, const Eigen::Vector3d& p) {
+  return q.weight > 0 ? std::sqrt(q.evaluate(p) / q.weight) : 0.0;
+}
+
+}  // namespace lodkit::detail

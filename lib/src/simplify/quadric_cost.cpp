@@ -1,0 +1,50 @@
+// Garland-Heckbert quadric error with optimal placement.
+#include "simplify/engine.h"
+
+namespace lodkit::detail {
+namespace {
+
+class QuadricCost final : public CostModel {
+ public:
+  explicit QuadricCost(Placement placement) : placement_(placement) {}
+
+  bool score(EngineState& s, Index u, Index v, Freedom freedom, Candidate& out) override {
+    const Quadric q = s.quadric[u] + s.quadric[v];
+    const Eigen::Vector3d& pu = s.position[u];
+    const Eigen::Vector3d& pv = s.position[v];
+    auto consider = [&](const Eigen::Vector3d& p, bool& have) {
+      const double c = q.evaluate(p);
+      if (!have || c < out.cost) out.position = p, out.cost = c, have = true;
+    };
+    bool have = false;
+    if (freedom == Freedom::AtKept) {
+      consider(pv, have);
+    } else if (placement_ == Placement::Midpoint) {
+      consider(0.5 * (pu + pv), have);
+    } else if (placement_ == Placement::Endpoint) {
+      consider(pv, have);  // the u -> v direction; v -> u is scored separately
+    } else {
+      // The 3x3 solve; where Q is rank-deficient (flat or straight regions) the eigen-solve keeps the
+      // unconstrained directions at the midpoint. Endpoints and midpoint stay as fallbacks.
+      const Eigen::Vector3d mid = 0.5 * (pu + pv);
+      Eigen::Vector3d best;
+      if (q.minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (pu - pv).norm() + 1e-12) consider(best, have);
+      consider(mid, have);
+      consider(pu, have);
+      consider(pv, have);
+    }
+    out.error = quadric_distance(q, out.position);
+    return have;
+  }
+
+ private:
+  Placement placement_;
+};
+
+}  // namespace
+
+std::unique_ptr<CostModel> make_quadric_cost(const SimplifyOptions& options) {
+  return std::make_unique<QuadricCost>(options.placement);
+}
+
+}  // namespace lodkit::detail

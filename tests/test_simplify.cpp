@@ -1,0 +1,251 @@
+// The simplifier's promises, checked on families of generated meshes for every method.
+#include <gtest/gtest.h>
+#include <lodkit/error.h>
+#include <lodkit/inspect.h>
+#include <lodkit/metrics.h>
+#include <lodkit/primitives.h>
+#include <lodkit/simplify.h>
+
+#include <random>
+
+#include "metrics/aabb_tree.h"
+
+namespace lodkit {
+namespace {
+
+// A bumpy closed surface: an icosphere with deterministic radial noise.
+Mesh bumpy_sphere(int subdivisions, double amplitude) {
+  Mesh m = make_icosphere({.subdivisions = subdivisions});
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> noise(-amplitude, amplitude);
+  for (Index v = 0; v < m.num_vertices(); ++v) m.positions.row(v) *= 1.0 + noise(rng);
+  return m;
+}
+
+// Output faces whose normal points against the nearest input face's normal.
+Index flipped_faces(const Mesh& input, const Mesh& output) {
+  const detail::AabbTree tree(input);
+  Index flipped = 0;
+  for (Index f = 0; f < output.num_faces(); ++f) {
+    const Eigen::Vector3d a = output.positions.row(output.triangles(f, 0)), b = output.positions.row(output.triangles(f, 1)),
+                          c = output.positions.row(output.triangles(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    const auto hit = tree.closest((a + b + c) / 3.0);
+    const Eigen::Vector3d p = input.positions.row(input.triangles(hit.face, 0)),
+                          q = input.positions.row(input.triangles(hit.face, 1)),
+                          r = input.positions.row(input.triangles(hit.face, 2));
+    if (n.dot((q - p).cross(r - p)) < 0) ++flipped;
+  }
+  return flipped;
+}
+
+struct Case {
+  std::string name;
+  Mesh mesh;
+};
+
+std::vector<Case> families() {
+  return {{"bumpy_sphere", bumpy_sphere(4, 0.02)},
+          {"torus", make_torus({.major_segments = 64, .minor_segments = 24})},
+          {"uv_sphere_with_seams", make_uv_sphere({.segments = 48, .rings = 24, .uvs = true})},
+          {"grid_with_boundary", make_grid({.divisions_x = 30, .divisions_y = 20})},
+          {"cylinder", make_cylinder({.segments = 48, .stacks = 12})}};
+}
+
+class EveryMethod : public ::testing::TestWithParam<SimplifyMethod> {};
+
+TEST_P(EveryMethod, KeepsTopologyAndOrientationAndHitsTheTarget) {
+  for (const Case& c : families()) {
+    SCOPED_TRACE(c.name);
+    const MeshReport before = inspect(c.mesh);
+    for (double ratio : {0.5, 0.1, 0.02}) {
+      SCOPED_TRACE(ratio);
+      SimplifyOptions o;
+      o.method = GetParam();
+      o.target_ratio = ratio;
+      const SimplifyResult r = simplify(c.mesh, o);
+      validate(r.mesh);
+      const MeshReport after = inspect(r.mesh);
+      EXPECT_TRUE(after.manifold);
+      EXPECT_TRUE(after.oriented);
+      EXPECT_EQ(after.euler_characteristic, before.euler_characteristic);
+      EXPECT_EQ(after.boundary_loops, before.boundary_loops);
+      EXPECT_EQ(after.components, before.components);
+      EXPECT_EQ(after.closed, before.closed);
+      EXPECT_EQ(after.degenerate_faces, 0);
+      EXPECT_EQ(flipped_faces(c.mesh, r.mesh), 0);
+      const Index target = static_cast<Index>(std::llround(ratio * c.mesh.num_faces()));
+      if (r.reason == StopReason::TargetReached) {
+        EXPECT_LE(r.faces_out, target);
+        EXPECT_GE(r.faces_out, target - 1);  // one below only when no collapse removes a single face
+      } else {
+        ADD_FAILURE() << "stopped early: " << r.reason_text;
+      }
+      EXPECT_EQ(r.faces_out, r.mesh.num_faces());
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, EveryMethod,
+                         ::testing::Values(SimplifyMethod::Quadric, SimplifyMethod::Hoppe, SimplifyMethod::EdgeLength),
+                         [](const auto& param_info) {
+                           std::string s = to_string(param_info.param);
+                           std::replace(s.begin(), s.end(), '-', '_');
+                           return s;
+                         });
+
+TEST(Simplify, OpenMeshWithBoundaryHitsOddTargetsExactly) {
+  const Mesh grid = make_grid({.divisions_x = 20, .divisions_y = 20});
+  for (Index target : {401, 400, 77, 10}) {
+    SimplifyOptions o;
+    o.target_faces = target;
+    EXPECT_EQ(simplify(grid, o).faces_out, target);
+  }
+}
+
+TEST(Simplify, FlatCubeFacesBecomeTwelveTrianglesWithZeroError) {
+  const Mesh cube = make_box({.size = {2, 1, 1}, .divisions = 8});
+  SimplifyOptions o;
+  o.target_faces = 12;
+  const SimplifyResult r = simplify(cube, o);
+  EXPECT_EQ(r.faces_out, 12) << r.reason_text;
+  EXPECT_LT(r.error, 1e-9);
+  EXPECT_LT(compare(cube, r.mesh).hausdorff, 1e-9);
+  ASSERT_TRUE(inspect(r.mesh).volume);
+  EXPECT_NEAR(*inspect(r.mesh).volume, 2.0, 1e-9);
+}
+
+TEST(Simplify, FlatGridBecomesTwoTrianglesWithZeroError) {
+  const Mesh grid = make_grid({.size = {3, 2}, .divisions_x = 24, .divisions_y = 16});
+  SimplifyOptions o;
+  o.target_faces = 2;
+  const SimplifyResult r = simplify(grid, o);
+  EXPECT_EQ(r.faces_out, 2) << r.reason_text;
+  EXPECT_LT(compare(grid, r.mesh).hausdorff, 1e-9);
+  EXPECT_NEAR(inspect(r.mesh).area, 6.0, 1e-9);
+}
+
+TEST(Simplify, UvSeamsStayAligned) {
+  const Mesh sphere = make_uv_sphere({.segments = 64, .rings = 32, .uvs = true});
+  SimplifyOptions o;
+  o.target_ratio = 0.1;
+  const SimplifyResult r = simplify(sphere, o);
+  const Mesh& m = r.mesh;
+  ASSERT_TRUE(m.has_uvs());
+  // No face straddles the u = 0 / u = 1 seam: its UV triangle would span most of the texture.
+  for (Index f = 0; f < m.num_faces(); ++f) {
+    double lo = 1, hi = 0;
+    for (int k = 0; k < 3; ++k) lo = std::min(lo, m.attributes.uvs(m.triangles(f, k), 0)),
+                                hi = std::max(hi, m.attributes.uvs(m.triangles(f, k), 0));
+    EXPECT_LT(hi - lo, 0.5) << "face " << f;
+  }
+  // The u = 0 / u = 1 seam is intact: every seam vertex on one side has its twin, at the same
+  // position with the same v, on the other.
+  Index seam_vertices = 0;
+  for (Index i = 0; i < m.num_vertices(); ++i) {
+    if (m.attributes.uvs(i, 0) != 0.0) continue;
+    ++seam_vertices;
+    Index twins = 0;
+    for (Index j = 0; j < m.num_vertices(); ++j)
+      twins += m.positions.row(i) == m.positions.row(j) && m.attributes.uvs(j, 0) == 1.0 &&
+               m.attributes.uvs(j, 1) == m.attributes.uvs(i, 1);
+    EXPECT_EQ(twins, 1) << "vertex " << i;
+  }
+  EXPECT_GE(seam_vertices, 2);
+  EXPECT_TRUE(inspect(m).closed);
+}
+
+TEST(Simplify, LockedBoundaryStaysPutAndTheReasonIsGiven) {
+  const Mesh grid = make_grid({.divisions_x = 10, .divisions_y = 10});
+  SimplifyOptions o;
+  o.target_faces = 2;
+  o.lock_boundary = true;
+  const SimplifyResult r = simplify(grid, o);
+  EXPECT_EQ(r.reason, StopReason::NoLegalCollapse);
+  EXPECT_GT(r.faces_out, 2);
+  EXPECT_EQ(r.locked_vertices, 40);
+  EXPECT_NE(r.reason_text.find("locked"), std::string::npos) << r.reason_text;
+  EXPECT_EQ(inspect(r.mesh).boundary_edges, 40);
+}
+
+TEST(Simplify, ErrorLimitStopsEarly) {
+  const Mesh m = bumpy_sphere(4, 0.02);
+  SimplifyOptions o;
+  o.target_faces = 20;
+  o.max_error = 0.002;
+  const SimplifyResult r = simplify(m, o);
+  EXPECT_EQ(r.reason, StopReason::ErrorLimit) << r.reason_text;
+  EXPECT_LE(r.error, 0.002);
+  EXPECT_GT(r.faces_out, 20);
+}
+
+TEST(Simplify, DirtyInputSimplifiesWithoutCrashing) {
+  // A bumpy sphere plus: a fin (a triangle hanging on one of its edges: a non-manifold edge), a bow tie
+  // touching a vertex, duplicate vertices (a second unwelded copy of some faces' corners), and
+  // unreferenced vertices.
+  Mesh m = bumpy_sphere(3, 0.01);
+  const Index nv = m.num_vertices(), nf = m.num_faces();
+  m.positions.conservativeResize(nv + 6, 3);
+  m.positions.row(nv) << 0, 0, 3;          // fin apex on edge (t0, t1) of face 0
+  m.positions.row(nv + 1) << 5, 5, 5;      // unreferenced
+  m.positions.row(nv + 2) = m.positions.row(m.triangles(5, 0));  // duplicate position
+  m.positions.row(nv + 3) << 2, 2, 2;
+  m.positions.row(nv + 4) << 2, 3, 2;      // bow tie on vertex of face 9
+  m.positions.row(nv + 5) << 9, 9, 9;      // unreferenced
+  m.triangles.conservativeResize(nf + 2, 3);
+  m.triangles.row(nf) << m.triangles(0, 1), m.triangles(0, 0), nv;
+  m.triangles.row(nf + 1) << m.triangles(9, 0), nv + 3, nv + 4;
+  m.triangles(5, 0) = nv + 2;
+  for (SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe, SimplifyMethod::EdgeLength}) {
+    SimplifyOptions o;
+    o.method = method;
+    o.target_ratio = 0.1;
+    const SimplifyResult r = simplify(m, o);
+    validate(r.mesh);
+    EXPECT_GT(r.locked_vertices, 0);
+    EXPECT_LT(r.faces_out, nf / 2);
+    const MeshReport after = inspect(r.mesh);
+    EXPECT_EQ(after.non_manifold_edges, 1);  // the fin's edge is locked, not repaired
+  }
+}
+
+TEST(Simplify, RecordsEveryCollapse) {
+  const Mesh m = bumpy_sphere(3, 0.01);
+  SimplifyOptions o;
+  o.target_ratio = 0.25;
+  o.record_collapses = true;
+  const SimplifyResult r = simplify(m, o);
+  ASSERT_EQ(static_cast<Index>(r.records.size()), r.collapses);
+  Index removed = 0;
+  for (const CollapseRecord& c : r.records) removed += static_cast<Index>(c.removed_faces.size());
+  EXPECT_EQ(removed, r.faces_in - r.faces_out);
+}
+
+TEST(Simplify, NaiveMethodWithoutChecksCanBreakTheModel) {
+  // The failure lodkit keeps on purpose: with topology checks off, edge-length collapses change the
+  // topology of a torus long before the target.
+  const Mesh torus = make_torus({.major_segments = 48, .minor_segments = 12});
+  SimplifyOptions o;
+  o.method = SimplifyMethod::EdgeLength;
+  o.preserve_topology = false;
+  o.target_faces = 24;
+  const MeshReport r = inspect(simplify(torus, o).mesh);
+  EXPECT_FALSE(r.manifold && r.genus == 1 && r.degenerate_faces == 0 && r.duplicate_faces == 0);
+}
+
+TEST(Simplify, BadOptionsAreErrors) {
+  const Mesh m = make_box({});
+  EXPECT_THROW(simplify(m, {.target_ratio = 1.5}), Error);
+  EXPECT_THROW(simplify(m, {.target_faces = -3}), Error);
+  EXPECT_THROW(simplify(m, {.max_error = -1.0}), Error);
+}
+
+TEST(Simplify, IsDeterministic) {
+  const Mesh m = bumpy_sphere(4, 0.02);
+  SimplifyOptions o;
+  o.target_ratio = 0.05;
+  EXPECT_EQ(simplify(m, o).mesh.positions, simplify(m, o).mesh.positions);
+}
+
+}  // namespace
+}  // namespace lodkit
