@@ -46,7 +46,7 @@ struct Case {
 
 std::vector<Case> families() {
   return {{"bumpy_sphere", bumpy_sphere(4, 0.02)},
-          {"torus", make_torus({.major_segments = 64, .minor_segments = 24})},
+          {"torus", make_torus({.major_segments = 96, .minor_segments = 32})},
           {"uv_sphere_with_seams", make_uv_sphere({.segments = 48, .rings = 24, .uvs = true})},
           {"grid_with_boundary", make_grid({.divisions_x = 30, .divisions_y = 20})},
           {"cylinder", make_cylinder({.segments = 48, .stacks = 12})}};

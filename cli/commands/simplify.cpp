@@ -22,7 +22,7 @@ struct SimplifyCliOptions {
   std::optional<std::string> max_error;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
   bool measure = false, json = false;
-  double max_normal_change = 90.0;
+  double max_normal_change = 60.0;
   std::uint64_t seed = 1;
 };
 

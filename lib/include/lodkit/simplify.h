@@ -54,7 +54,7 @@ struct SimplifyOptions {
   bool preserve_topology = true;   ///< link condition and flip checks (off only to show failure)
   bool lock_boundary = false;      ///< boundary vertices never move or disappear
   double boundary_weight = 10.0;   ///< weight of boundary constraint planes (quadric); higher keeps borders
-  double max_normal_change_deg = 90.0;  ///< a face may not turn further than this in one collapse
+  double max_normal_change_deg = 60.0;  ///< how far a face may turn, in one collapse and in all
   double min_triangle_quality = 0.02;   ///< 4 sqrt(3) area / sum of squared edges, for new triangles
 
   /// Hoppe: random points sampled per input face (besides the vertices), and the seed.

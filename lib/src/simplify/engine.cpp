@@ -23,7 +23,8 @@ enum class Rejection { None, Locked, Topology, Boundary, Seam, Flip, Sliver, Err
 struct HeapEntry {
   double cost;
   Index u, v;
-  std::uint32_t version_u, version_v;
+  std::uint32_t version_u, version_v;  // the entry is void once either endpoint changed
+  std::uint32_t epoch;                 // dirty_[u] + dirty_[v] when scored: re-score if it moved
   // std::priority_queue is a max-heap: invert, and break ties by index so runs are deterministic.
   bool operator<(const HeapEntry& o) const {
     if (cost != o.cost) return cost > o.cost;
@@ -65,6 +66,7 @@ class Engine {
   std::unique_ptr<CostModel> cost_;
   std::vector<HeapEntry> heap_;
   std::vector<std::uint32_t> version_;
+  std::vector<std::uint32_t> dirty_;  // bumped when a point's neighbourhood energy changed (wide updates)
   double cos_max_turn_ = 0;
   // Scratch, reused across calls; the wedge map is valid for the last structure() call.
   std::vector<Index> shared_, ring_u_, ring_v_, ring_tmp_;
@@ -95,6 +97,7 @@ void Engine::setup(const Mesh& mesh) {
   s_.flags.assign(static_cast<std::size_t>(points), 0);
   s_.point_faces.assign(static_cast<std::size_t>(points), {});
   version_.assign(static_cast<std::size_t>(points), 0);
+  dirty_.assign(static_cast<std::size_t>(points), 0);
 
   // Faces; a face whose corners are not three distinct points cannot take part and is dropped.
   std::vector<std::array<Index, 3>> point_faces;
@@ -296,12 +299,25 @@ Rejection Engine::evaluate(Index u, Index v, Candidate& c, bool full) {
 
 void Engine::push_edge(Index a, Index b) {
   Candidate ca, cb;
-  const bool ok_a = evaluate(a, b, ca, false) == Rejection::None;
-  const bool ok_b = evaluate(b, a, cb, false) == Rejection::None;
-  if (!ok_a && !ok_b) return;
-  const bool use_a = ok_a && (!ok_b || ca.cost <= cb.cost);
+  // When neither end is constrained both directions merge into the same vertex at the same place:
+  // score one.
+  Freedom fa, fb;
+  const bool ok_a = structure(a, b, fa, false) == Rejection::None;
+  const bool ok_b = structure(b, a, fb, false) == Rejection::None;
+  if (o_.placement != Placement::Endpoint && ok_a && ok_b && fa == Freedom::Free && fb == Freedom::Free &&
+      !s_.has(a, kBorder) && !s_.has(b, kBorder) &&
+      !s_.has(a, kSeam) && !s_.has(b, kSeam)) {
+    if (evaluate(a, b, ca, false) != Rejection::None) return;
+    heap_.push_back({ca.cost, a, b, version_[a], version_[b], dirty_[a] + dirty_[b]});
+    std::push_heap(heap_.begin(), heap_.end());
+    return;
+  }
+  const bool scored_a = ok_a && evaluate(a, b, ca, false) == Rejection::None;
+  const bool scored_b = ok_b && evaluate(b, a, cb, false) == Rejection::None;
+  if (!scored_a && !scored_b) return;
+  const bool use_a = scored_a && (!scored_b || ca.cost <= cb.cost);
   const Index u = use_a ? a : b, v = use_a ? b : a;
-  heap_.push_back({use_a ? ca.cost : cb.cost, u, v, version_[u], version_[v]});
+  heap_.push_back({use_a ? ca.cost : cb.cost, u, v, version_[u], version_[v], dirty_[u] + dirty_[v]});
   std::push_heap(heap_.begin(), heap_.end());
 }
 
@@ -345,20 +361,14 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
   ++version_[v];
   max_error_ = std::max(max_error_, c.error);
   ++collapses_;
-  cost_->collapsed(s_, u, v);
+  cost_->collapsed(s_, u, v, shared_);
 
   std::vector<Index> ring;
   neighbours(v, ring);
-  if (cost_->wide_update()) {
-    // The cost of every edge touching v's neighbourhood may have changed.
-    for (Index w : ring) ++version_[w];
-    std::vector<Index> ring_w;
-    for (Index w : ring) {
-      neighbours(w, ring_w);
-      for (Index x : ring_w)
-        if (x != v && (x > w || std::find(ring.begin(), ring.end(), x) == ring.end())) push_edge(w, x);
-    }
-  }
+  // Edges at v are re-scored now; with a wide update, edges at v's neighbours are marked and
+  // re-scored when they reach the top of the queue.
+  if (cost_->wide_update())
+    for (Index w : ring) ++dirty_[w];
   for (Index w : ring) push_edge(v, w);
 }
 
@@ -421,11 +431,15 @@ SimplifyResult Engine::run(Index target) {
     const HeapEntry e = heap_.back();
     heap_.pop_back();
     if (e.version_u != version_[e.u] || e.version_v != version_[e.v]) continue;  // stale
+    if (e.epoch != dirty_[e.u] + dirty_[e.v]) {  // its neighbourhood changed: score it again
+      push_edge(e.u, e.v);
+      continue;
+    }
     if (evaluate(e.u, e.v, c, true) != Rejection::None) {
       // The best direction is illegal now; the other one may still be worth queueing.
       Candidate r;
       if (evaluate(e.v, e.u, r, true) == Rejection::None) {
-        heap_.push_back({r.cost, e.v, e.u, version_[e.v], version_[e.u]});
+        heap_.push_back({r.cost, e.v, e.u, version_[e.v], version_[e.u], dirty_[e.v] + dirty_[e.u]});
         std::push_heap(heap_.begin(), heap_.end());
       }
       continue;

@@ -58,9 +58,10 @@ class CostModel {
   virtual ~CostModel() = default;
   /// Scores collapse u -> v. Fills `out`; returns false if the cost refuses the collapse.
   virtual bool score(EngineState& s, Index u, Index v, Freedom freedom, Candidate& out) = 0;
-  /// Called after u -> v was performed; `faces` are the faces now around v.
-  virtual void collapsed(EngineState&, Index /*u*/, Index /*v*/) {}
-  /// True if a collapse changes the costs of edges around v's neighbours too (not just v's edges).
+  /// Called after u -> v was performed; `removed_faces` are the faces that vanished.
+  virtual void collapsed(EngineState&, Index /*u*/, Index /*v*/, const std::vector<Index>& /*removed_faces*/) {}
+  /// True if a collapse changes the costs of edges around v's neighbours too (not just v's edges):
+  /// those are then re-scored lazily, when they reach the top of the queue.
   virtual bool wide_update() const { return false; }
 };
 

@@ -1,8 +1,262 @@
-// Placeholder until the energy model lands: Hoppe's method is scored like the quadric.
+// Hoppe's energy (Progressive meshes, SIGGRAPH 1996, section 4): E = E_dist + E_spring, where E_dist
+// is the sum of squared distances from points sampled on the original surface to the current mesh
+// and E_spring = kappa * sum of squared edge lengths. Every point belongs to the face it projects to.
+// A collapse u -> v is scored by Delta E: the points of the faces around u and v are re-projected onto
+// the faces around the merged vertex, whose position is optimised by alternating (a) projection of
+// each point onto its nearest face and (b) the linear least-squares solve for the position given
+// those projections, starting from the quadric-optimal position.
+#include <random>
+
+#include "core/geometry.h"
 #include "simplify/engine.h"
 
 namespace lodkit::detail {
-std::unique_ptr<CostModel> make_hoppe_cost(const SimplifyOptions& options, const EngineState&) {
-  return make_quadric_cost(options);
+namespace {
+
+class HoppeCost final : public CostModel {
+ public:
+  HoppeCost(const SimplifyOptions& o, const EngineState& s) {
+    // Points: every vertex position, plus `points_per_face` random points per face (seeded).
+    const Mesh& m = *s.input;
+    std::mt19937_64 rng(o.seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    face_points_.resize(s.face.size());
+    std::vector<char> placed(s.position.size(), 0);
+    double carry = 0;
+    for (std::size_t f = 0; f < s.face.size(); ++f) {
+      if (s.face_dead[f]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Index p = s.corner_point(Index(f), k);
+        if (!placed[p]) placed[p] = 1, add_point(s.position[p], Index(f));
+      }
+      carry += o.hoppe_points_per_face;
+      for (; carry >= 1.0; carry -= 1.0) {
+        double a = unit(rng), b = unit(rng);
+        if (a + b > 1) a = 1 - a, b = 1 - b;
+        const Eigen::Vector3d p0 = m.positions.row(s.face[f][0]), p1 = m.positions.row(s.face[f][1]),
+                              p2 = m.positions.row(s.face[f][2]);
+        add_point(p0 + a * (p1 - p0) + b * (p2 - p0), Index(f));
+      }
+    }
+  }
+
+  bool wide_update() const override { return true; }
+
+  bool score(EngineState& s, Index u, Index v, Freedom freedom, Candidate& out) override {
+    gather(s, u, v);
+    // Spring energy before: the edges at u and at v (the rest of the neighbourhood does not change).
+    const double kappa = spring_constant();
+    double before = 0;
+    for (std::size_t j = 0; j < points_.size(); ++j) before += weight_[j] * dist2_[points_[j]];
+    for (Index w : ring_u_) before += kappa * (s.position[u] - s.position[w]).squaredNorm();
+    for (Index w : ring_v_)
+      if (w != u) before += kappa * (s.position[v] - s.position[w]).squaredNorm();
+
+    double worst = 0;  // largest squared point distance at the last evaluated position
+    // With the projections held fixed, E at another position q is sum w |x - b q - f|^2 + springs: an
+    // upper bound of the true E(q), since re-projecting can only bring points closer. So one projection
+    // pass gives both the solve and a safe energy for the solved position.
+    double solved_energy = 0, solved_worst = 0;
+    auto energy = [&](const Eigen::Vector3d& p, bool solve, Eigen::Vector3d* improved) {
+      // Project every point onto the new star; optionally solve for the position given the projections.
+      double e = 0, sum_b2 = 0;
+      worst = 0;
+      projections_.clear();
+      Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+      // The star's triangles with bounding spheres, so most point-triangle tests can be skipped.
+      tri_.clear();
+      for (const auto& t : star_) {
+        Tri tri;
+        for (int k = 0; k < 3; ++k) tri.c[k] = t[k] < 0 ? p : s.position[t[k]];
+        tri.moving = t[0] < 0 ? 0 : t[1] < 0 ? 1 : 2;
+        tri.centre = (tri.c[0] + tri.c[1] + tri.c[2]) / 3.0;
+        tri.radius = std::sqrt(std::max({(tri.c[0] - tri.centre).squaredNorm(), (tri.c[1] - tri.centre).squaredNorm(),
+                                         (tri.c[2] - tri.centre).squaredNorm()}));
+        tri_.push_back(tri);
+      }
+      for (std::size_t j = 0; j < points_.size(); ++j) {
+        const Index i = points_[j];
+        const double weight = weight_[j];
+        double best = INFINITY, best_b = 0;
+        Eigen::Vector3d best_fixed = Eigen::Vector3d::Zero();
+        const Eigen::Vector3d& x = point_[i];
+        for (const Tri& t : tri_) {
+          const double gap = (x - t.centre).norm() - t.radius;
+          if (gap > 0 && gap * gap >= best) continue;
+          const Eigen::Vector3d q = closest_point_on_triangle(x, t.c[0], t.c[1], t.c[2]);
+          const double d = (q - x).squaredNorm();
+          if (d < best) {
+            best = d;
+            if (solve) {
+              // Barycentric weight of the moving corner, and the fixed remainder of q.
+              const int k = t.moving;
+              const Eigen::Vector3d n = (t.c[1] - t.c[0]).cross(t.c[2] - t.c[0]);
+              const double area2 = n.squaredNorm();
+              const Eigen::Vector3d e1 = t.c[(k + 1) % 3] - q, e2 = t.c[(k + 2) % 3] - q;
+              best_b = area2 > 0 ? std::clamp(e1.cross(e2).dot(n) / area2, 0.0, 1.0) : 0.0;
+              best_fixed = q - best_b * p;
+            }
+          }
+        }
+        e += weight * best;
+        worst = std::max(worst, best);
+        if (solve) {
+          sum_b2 += weight * best_b * best_b;
+          rhs += weight * best_b * (point_[i] - best_fixed);
+          projections_.push_back({i, weight, best_b, best_fixed});
+        }
+      }
+      for (Index w : ring_) {
+        e += kappa * (p - s.position[w]).squaredNorm();
+        if (solve) rhs += kappa * s.position[w], sum_b2 += kappa;
+      }
+      if (solve && improved) {
+        *improved = sum_b2 > 0 ? Eigen::Vector3d(rhs / sum_b2) : p;
+        solved_energy = 0, solved_worst = 0;
+        for (const Projection& pr : projections_) {
+          const double d = (point_[pr.point] - pr.b * *improved - pr.fixed).squaredNorm();
+          solved_energy += pr.weight * d;
+          solved_worst = std::max(solved_worst, d);
+        }
+        for (Index w : ring_) solved_energy += kappa * (*improved - s.position[w]).squaredNorm();
+      }
+      return e;
+    };
+
+    // Start where the quadric puts the vertex (cheap, and close to the energy's optimum), project the
+    // points once while setting up the least-squares solve, then evaluate the solved position.
+    Eigen::Vector3d p = s.position[v];
+    Eigen::Vector3d next;
+    double e = 0, e_worst = 0;
+    {
+      if (freedom == Freedom::Free) {
+        const Quadric q = s.quadric[u] + s.quadric[v];
+        const Eigen::Vector3d mid = 0.5 * (s.position[u] + s.position[v]);
+        Eigen::Vector3d best;
+        p = q.minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (s.position[u] - s.position[v]).norm() ? best : mid;
+      }
+      e = energy(p, freedom == Freedom::Free, &next), e_worst = worst;
+      if (freedom == Freedom::Free && solved_energy < e) e = solved_energy, p = next, e_worst = solved_worst;
+    }
+    out.position = p;
+    out.cost = e - before;
+    out.error = std::sqrt(e_worst);  // the farthest sample point from the merged neighbourhood
+    return true;
+  }
+
+  void collapsed(EngineState& s, Index u, Index v, const std::vector<Index>& removed_faces) override {
+    // Re-assign the points of the old neighbourhood to the faces now around v.
+    std::vector<Index> moving;
+    for (Index f : removed_faces) moving.insert(moving.end(), face_points_[f].begin(), face_points_[f].end());
+    for (Index f : removed_faces) face_points_[f].clear();
+    const std::vector<Index>& around = s.faces_of(v);
+    for (Index f : around) {
+      moving.insert(moving.end(), face_points_[f].begin(), face_points_[f].end());
+      face_points_[f].clear();
+    }
+    (void)u;
+    for (Index i : moving) {
+      double best = INFINITY;
+      Index best_face = -1;
+      for (Index f : around) {
+        const Eigen::Vector3d q = closest_point_on_triangle(point_[i], s.position[s.corner_point(f, 0)],
+                                                            s.position[s.corner_point(f, 1)], s.position[s.corner_point(f, 2)]);
+        const double d = (q - point_[i]).squaredNorm();
+        if (d < best) best = d, best_face = f;
+      }
+      dist2_[i] = best;
+      face_points_[best_face].push_back(i);
+    }
+  }
+
+ private:
+  void add_point(const Eigen::Vector3d& p, Index face) {
+    face_points_[face].push_back(static_cast<Index>(point_.size()));
+    point_.push_back(p);
+    dist2_.push_back(0.0);
+  }
+
+  // Collects the neighbourhood of u -> v: its points, the new star (corner -1 = the merged vertex),
+  // and the rings of u, v and the merged vertex.
+  void gather(EngineState& s, Index u, Index v) {
+    points_.clear();
+    weight_.clear();
+    point_count_ = 0;
+    star_.clear();
+    ring_u_.clear(), ring_v_.clear(), ring_.clear();
+    faces_ = 0;
+    for (Index p : {u, v})
+      for (Index f : s.faces_of(p)) {
+        bool has_u = false, has_v = false;
+        for (int k = 0; k < 3; ++k) has_u |= s.corner_point(f, k) == u, has_v |= s.corner_point(f, k) == v;
+        if (p == v && has_u) continue;  // counted from u's side already
+        ++faces_;
+        // At most kPointsPerFace points of each face take part, each standing for its share: the
+        // estimate of Delta E stays unbiased while coarse levels (100+ points per face) stay cheap.
+        const auto& fp = face_points_[f];
+        point_count_ += fp.size();
+        const std::size_t stride = (fp.size() + kPointsPerFace - 1) / kPointsPerFace;
+        for (std::size_t i = 0; i < fp.size(); i += std::max<std::size_t>(stride, 1)) {
+          points_.push_back(fp[i]);
+          weight_.push_back(double(stride ? stride : 1));
+        }
+        for (int k = 0; k < 3; ++k) {
+          const Index q = s.corner_point(f, k);
+          if (q != u && q != v) ring_.push_back(q);
+          if (p == u && q != u) ring_u_.push_back(q);
+          if (p == v && q != v) ring_v_.push_back(q);
+        }
+        if (has_u && has_v) continue;  // vanishes
+        std::array<Index, 3> t;
+        for (int k = 0; k < 3; ++k) {
+          const Index q = s.corner_point(f, k);
+          t[k] = q == u || q == v ? -1 : q;
+        }
+        star_.push_back(t);
+      }
+    for (auto* r : {&ring_u_, &ring_v_, &ring_}) {
+      std::sort(r->begin(), r->end());
+      r->erase(std::unique(r->begin(), r->end()), r->end());
+    }
+  }
+
+  // Hoppe's schedule: springs matter while there are few points per face (they keep vertices from
+  // drifting where the data cannot hold them) and fade as points accumulate.
+  double spring_constant() const {
+    const double points_per_face = faces_ > 0 ? double(point_count_) / faces_ : 0.0;
+    if (points_per_face < 4) return 1e-2;
+    if (points_per_face < 8) return 1e-4;
+    return 1e-8;
+  }
+
+  std::vector<Eigen::Vector3d> point_;
+  std::vector<double> dist2_;
+  std::vector<std::vector<Index>> face_points_;
+  // Scratch for one candidate.
+  static constexpr std::size_t kPointsPerFace = 16;
+  std::vector<Index> points_, ring_u_, ring_v_, ring_;
+  std::vector<double> weight_;
+  std::size_t point_count_ = 0;
+  std::vector<std::array<Index, 3>> star_;
+  struct Tri {
+    Eigen::Vector3d c[3], centre;
+    double radius;
+    int moving;
+  };
+  std::vector<Tri> tri_;
+  struct Projection {
+    Index point;
+    double weight, b;
+    Eigen::Vector3d fixed;
+  };
+  std::vector<Projection> projections_;
+  Index faces_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<CostModel> make_hoppe_cost(const SimplifyOptions& options, const EngineState& state) {
+  return std::make_unique<HoppeCost>(options, state);
 }
+
 }  // namespace lodkit::detail
