@@ -1,0 +1,20 @@
+#pragma once
+// Adapters that run the peer simplifiers on a lodkit::Mesh. Each runs in its own translation unit so
+// CGAL's heavy templates compile once, apart from everything else.
+#include <lodkit/mesh.h>
+
+namespace lodkit::bench {
+
+struct PeerRun {
+  Mesh mesh;
+  double seconds = 0;  ///< the simplification call only, not the conversions around it
+};
+
+/// meshoptimizer's meshopt_simplify (attribute-free, error limit off), or meshopt_simplifySloppy.
+PeerRun run_meshoptimizer(const Mesh& mesh, Index target_faces, bool sloppy);
+/// OpenMesh's Decimater with ModQuadric and ModNormalFlipping, decimate_to_faces.
+PeerRun run_openmesh(const Mesh& mesh, Index target_faces);
+/// CGAL's edge_collapse with Garland-Heckbert plane policies; stops at 1.5 x target edges.
+PeerRun run_cgal(const Mesh& mesh, Index target_faces);
+
+}  // namespace lodkit::bench

@@ -1,0 +1,168 @@
+// Simplification benchmark: lodkit's methods beside meshoptimizer, OpenMesh's Decimater and CGAL's
+// edge_collapse, on the same input and targets. Every run happens in a fresh child process (time of
+// the simplification call, and the process's peak RSS); every result is then measured by lodkit's
+// compare (symmetric Hausdorff, RMS, as % of the input's bounding-box diagonal) and inspected
+// (non-manifold edges, faces flipped against the nearest input face).
+//
+//   lodkit_bench_simplify [--targets 0.1,0.01] [--methods quadric,hoppe,...] [--csv FILE]
+//                         [--hoppe-max-faces N] MESH...
+#include <lodkit/inspect.h>
+#include <lodkit/io.h>
+#include <lodkit/metrics.h>
+#include <lodkit/simplify.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <vector>
+
+#include "metrics/aabb_tree.h"
+#include "peers/peers.h"
+
+namespace fs = std::filesystem;
+using namespace lodkit;
+
+namespace {
+
+struct Outcome {
+  bool ok = false;
+  double seconds = 0;
+  double peak_mib = 0;
+  Mesh mesh;
+};
+
+bench::PeerRun run_method(const std::string& method, const Mesh& mesh, Index target) {
+  if (method == "meshopt") return bench::run_meshoptimizer(mesh, target, false);
+  if (method == "meshopt-sloppy") return bench::run_meshoptimizer(mesh, target, true);
+  if (method == "openmesh") return bench::run_openmesh(mesh, target);
+  if (method == "cgal") return bench::run_cgal(mesh, target);
+  SimplifyOptions o;
+  o.method = *parse_method(method);
+  o.target_faces = target;
+  const auto t0 = std::chrono::steady_clock::now();
+  SimplifyResult r = simplify(mesh, o);
+  return {std::move(r.mesh), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()};
+}
+
+Outcome run_in_child(const std::string& method, const fs::path& input, Index target, const fs::path& output) {
+  int fds[2];
+  if (pipe(fds) != 0) std::exit(1);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    const Mesh mesh = read_mesh(input);
+    const bench::PeerRun run = run_method(method, mesh, target);
+    write_mesh(run.mesh, output);
+    if (write(fds[1], &run.seconds, sizeof run.seconds) != sizeof run.seconds) _exit(4);
+    _exit(0);
+  }
+  close(fds[1]);
+  Outcome o;
+  o.ok = read(fds[0], &o.seconds, sizeof o.seconds) == sizeof o.seconds;
+  close(fds[0]);
+  int status = 0;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  o.ok = o.ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  o.peak_mib = usage.ru_maxrss / 1024.0;
+  if (o.ok) o.mesh = read_mesh(output);
+  return o;
+}
+
+Index flipped_faces(const Mesh& input, const detail::AabbTree& tree, const Mesh& output) {
+  Index flipped = 0;
+  for (Index f = 0; f < output.num_faces(); ++f) {
+    const Eigen::Vector3d a = output.positions.row(output.triangles(f, 0)), b = output.positions.row(output.triangles(f, 1)),
+                          c = output.positions.row(output.triangles(f, 2));
+    const auto hit = tree.closest((a + b + c) / 3.0);
+    const Eigen::Vector3d p = input.positions.row(input.triangles(hit.face, 0)),
+                          q = input.positions.row(input.triangles(hit.face, 1)),
+                          r = input.positions.row(input.triangles(hit.face, 2));
+    if ((b - a).cross(c - a).dot((q - p).cross(r - p)) < 0) ++flipped;
+  }
+  return flipped;
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> methods{"quadric", "hoppe", "edge-length", "meshopt", "meshopt-sloppy", "openmesh", "cgal"};
+  std::vector<double> targets{0.1, 0.01};
+  std::vector<std::string> inputs;
+  std::string csv_path;
+  Index hoppe_max_faces = 150'000;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--methods" && i + 1 < argc) methods = split(argv[++i]);
+    else if (a == "--targets" && i + 1 < argc) {
+      targets.clear();
+      for (const auto& t : split(argv[++i])) targets.push_back(std::stod(t));
+    } else if (a == "--csv" && i + 1 < argc) csv_path = argv[++i];
+    else if (a == "--hoppe-max-faces" && i + 1 < argc) hoppe_max_faces = std::stoi(argv[++i]);
+    else inputs.push_back(a);
+  }
+  if (inputs.empty()) {
+    std::fprintf(stderr, "usage: lodkit_bench_simplify [--targets 0.1,0.01] [--methods ...] [--csv FILE] MESH...\n");
+    return 2;
+  }
+  const fs::path work = fs::temp_directory_path() / fmt::format("lodkit-bench-simplify-{}", getpid());
+  fs::create_directories(work);
+  std::ofstream csv;
+  if (!csv_path.empty()) {
+    csv.open(csv_path);
+    csv << "mesh,faces_in,target,method,faces_out,seconds,peak_mib,hausdorff_pct,rms_pct,normal_dev_deg,non_manifold_edges,flipped,components,euler\n";
+  }
+  fmt::print("| mesh → target | method | time s | peak MiB | faces | Hausdorff % | RMS % | non-manifold edges | flipped |\n");
+  fmt::print("|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const std::string& path : inputs) {
+    // Prepared once: unreferenced vertices dropped (peers differ in how they treat them).
+    Mesh mesh = read_mesh(path);
+    remove_unreferenced_vertices(mesh);
+    const fs::path prepared = work / "input.ply";
+    write_mesh(mesh, prepared);
+    const detail::AabbTree tree(mesh);
+    const std::string name = fs::path(path).filename().string();
+    for (double ratio : targets) {
+      const auto target = static_cast<Index>(std::llround(ratio * mesh.num_faces()));
+      bool first = true;
+      for (const std::string& method : methods) {
+        if (method == "hoppe" && mesh.num_faces() > hoppe_max_faces) continue;
+        const Outcome o = run_in_child(method, prepared, target, work / "output.ply");
+        const std::string label = first ? fmt::format("{} {} → {}", name, mesh.num_faces(), target) : "";
+        first = false;
+        if (!o.ok || o.mesh.num_faces() == 0) {
+          fmt::print("| {} | {} | failed | | | | | | |\n", label, method);
+          continue;
+        }
+        const Comparison c = compare(mesh, o.mesh);
+        const MeshReport r = inspect(o.mesh);
+        const Index flipped = flipped_faces(mesh, tree, o.mesh);
+        const double normal_dev = 0.5 * (c.a_to_b.normal_deviation_mean_deg + c.b_to_a.normal_deviation_mean_deg);
+        fmt::print("| {} | {} | {:.3f} | {:.0f} | {} | {:.4f} | {:.5f} | {} | {} |\n", label, method, o.seconds, o.peak_mib,
+                   o.mesh.num_faces(), c.percent(c.hausdorff), c.percent(c.rms), r.non_manifold_edges, flipped);
+        std::fflush(stdout);
+        if (csv.is_open())
+          csv << fmt::format("{},{},{},{},{},{:.6f},{:.1f},{:.6f},{:.7f},{:.4f},{},{},{},{}\n", name, mesh.num_faces(), target,
+                             method, o.mesh.num_faces(), o.seconds, o.peak_mib, c.percent(c.hausdorff), c.percent(c.rms),
+                             normal_dev, r.non_manifold_edges, flipped, r.components, r.euler_characteristic);
+      }
+    }
+  }
+  fs::remove_all(work);
+  return 0;
+}
