@@ -9,6 +9,7 @@
 
 #include "core/topology.h"
 #include "simplify/engine.h"
+#include "simplify/queue.h"
 
 namespace lodkit {
 namespace detail {
@@ -20,16 +21,21 @@ namespace {
 // Why a candidate collapse was refused. The final report counts these over the edges left.
 enum class Rejection { None, Locked, Topology, Boundary, Seam, Flip, Sliver, ErrorLimit, Cost, kCount };
 
+// 20 bytes: the queue holds millions of these and its speed is its cache footprint. Counters only
+// grow, so a sum changes whenever either of its terms does.
 struct HeapEntry {
-  double cost;
+  float cost;
   Index u, v;
-  std::uint32_t version_u, version_v;  // the entry is void once either endpoint changed
-  std::uint32_t epoch;                 // dirty_[u] + dirty_[v] when scored: re-score if it moved
-  // std::priority_queue is a max-heap: invert, and break ties by index so runs are deterministic.
-  bool operator<(const HeapEntry& o) const {
-    if (cost != o.cost) return cost > o.cost;
-    if (u != o.u) return u > o.u;
-    return v > o.v;
+  std::uint32_t version;  // version_[u] + version_[v] when scored: void once either endpoint changed
+  std::uint32_t epoch;    // dirty_[u] + dirty_[v] when scored: re-score if it moved
+};
+
+// Cheapest first; ties broken by index so runs are deterministic.
+struct CheaperFirst {
+  bool operator()(const HeapEntry& a, const HeapEntry& b) const {
+    if (a.cost != b.cost) return a.cost < b.cost;
+    if (a.u != b.u) return a.u < b.u;
+    return a.v < b.v;
   }
 };
 
@@ -57,6 +63,9 @@ class Engine {
   Rejection geometry(Index u, Index v, const Eigen::Vector3d& p);
   Rejection evaluate(Index u, Index v, Candidate& c, bool full);
   void push_edge(Index a, Index b);
+  HeapEntry entry(double cost, Index u, Index v) const {
+    return {static_cast<float>(cost), u, v, version_[u] + version_[v], dirty_[u] + dirty_[v]};
+  }
   void collapse(Index u, Index v, const Candidate& c);
   void neighbours(Index p, std::vector<Index>& out);
   std::string stop_report(Index target);
@@ -64,7 +73,7 @@ class Engine {
   SimplifyOptions o_;
   EngineState s_;
   std::unique_ptr<CostModel> cost_;
-  std::vector<HeapEntry> heap_;
+  QuadHeap<HeapEntry, CheaperFirst> heap_;
   std::vector<std::uint32_t> version_;
   std::vector<std::uint32_t> dirty_;  // bumped when a point's neighbourhood energy changed (wide updates)
   double cos_max_turn_ = 0;
@@ -298,27 +307,25 @@ Rejection Engine::evaluate(Index u, Index v, Candidate& c, bool full) {
 }
 
 void Engine::push_edge(Index a, Index b) {
-  Candidate ca, cb;
-  // When neither end is constrained both directions merge into the same vertex at the same place:
-  // score one.
+  // Cheap checks per direction, then the cost. When neither end is constrained both directions merge
+  // into the same vertex at the same place (unless placement is at an endpoint): score one.
   Freedom fa, fb;
   const bool ok_a = structure(a, b, fa, false) == Rejection::None;
   const bool ok_b = structure(b, a, fb, false) == Rejection::None;
-  if (o_.placement != Placement::Endpoint && ok_a && ok_b && fa == Freedom::Free && fb == Freedom::Free &&
-      !s_.has(a, kBorder) && !s_.has(b, kBorder) &&
-      !s_.has(a, kSeam) && !s_.has(b, kSeam)) {
-    if (evaluate(a, b, ca, false) != Rejection::None) return;
-    heap_.push_back({ca.cost, a, b, version_[a], version_[b], dirty_[a] + dirty_[b]});
-    std::push_heap(heap_.begin(), heap_.end());
-    return;
-  }
-  const bool scored_a = ok_a && evaluate(a, b, ca, false) == Rejection::None;
-  const bool scored_b = ok_b && evaluate(b, a, cb, false) == Rejection::None;
+  if (!ok_a && !ok_b) return;
+  auto score = [&](Index u, Index v, Freedom f, Candidate& c) {
+    return cost_->score(s_, u, v, f, c) && !(o_.max_error && c.error > *o_.max_error);
+  };
+  Candidate ca, cb;
+  const bool symmetric = ok_a && ok_b && fa == Freedom::Free && fb == Freedom::Free &&
+                         o_.placement != Placement::Endpoint && !s_.has(a, kBorder) && !s_.has(b, kBorder) &&
+                         !s_.has(a, kSeam) && !s_.has(b, kSeam);
+  const bool scored_a = ok_a && score(a, b, fa, ca);
+  const bool scored_b = !symmetric && ok_b && score(b, a, fb, cb);
   if (!scored_a && !scored_b) return;
   const bool use_a = scored_a && (!scored_b || ca.cost <= cb.cost);
   const Index u = use_a ? a : b, v = use_a ? b : a;
-  heap_.push_back({use_a ? ca.cost : cb.cost, u, v, version_[u], version_[v], dirty_[u] + dirty_[v]});
-  std::push_heap(heap_.begin(), heap_.end());
+  heap_.push(entry(use_a ? ca.cost : cb.cost, u, v));
 }
 
 void Engine::collapse(Index u, Index v, const Candidate& c) {
@@ -427,10 +434,8 @@ SimplifyResult Engine::run(Index target) {
   std::optional<std::pair<Index, Index>> deferred;
   Candidate c;
   while (s_.alive_faces > target && !heap_.empty()) {
-    std::pop_heap(heap_.begin(), heap_.end());
-    const HeapEntry e = heap_.back();
-    heap_.pop_back();
-    if (e.version_u != version_[e.u] || e.version_v != version_[e.v]) continue;  // stale
+    const HeapEntry e = heap_.pop();
+    if (e.version != version_[e.u] + version_[e.v]) continue;  // stale
     if (e.epoch != dirty_[e.u] + dirty_[e.v]) {  // its neighbourhood changed: score it again
       push_edge(e.u, e.v);
       continue;
@@ -439,8 +444,7 @@ SimplifyResult Engine::run(Index target) {
       // The best direction is illegal now; the other one may still be worth queueing.
       Candidate r;
       if (evaluate(e.v, e.u, r, true) == Rejection::None) {
-        heap_.push_back({r.cost, e.v, e.u, version_[e.v], version_[e.u], dirty_[e.v] + dirty_[e.u]});
-        std::push_heap(heap_.begin(), heap_.end());
+        heap_.push(entry(r.cost, e.v, e.u));
       }
       continue;
     }
