@@ -253,3 +253,58 @@ TEST(Simplify, IsDeterministic) {
 
 }  // namespace
 }  // namespace lodkit
+
+namespace lodkit {
+namespace {
+
+// On a flat UV-mapped grid the right UV of any point is a linear function of its position.
+double worst_uv_error(const Mesh& m) {
+  double worst = 0;
+  for (Index v = 0; v < m.num_vertices(); ++v) {
+    const Eigen::RowVector2d expected(m.positions(v, 0) + 0.5, m.positions(v, 1) + 0.5);
+    worst = std::max(worst, (m.attributes.uvs.row(v) - expected).norm());
+  }
+  return worst;
+}
+
+TEST(SimplifyAttributes, WeightedUvsFollowTheMovedVertices) {
+  const Mesh grid = make_grid({.divisions_x = 16, .divisions_y = 16, .uvs = true});
+  ASSERT_LT(worst_uv_error(grid), 1e-12);
+  SimplifyOptions plain;
+  plain.target_ratio = 0.1;
+  const double without = worst_uv_error(simplify(grid, plain).mesh);
+  SimplifyOptions weighted = plain;
+  weighted.attribute_weights.uvs = 1.0;
+  const SimplifyResult r = simplify(grid, weighted);
+  EXPECT_LT(worst_uv_error(r.mesh), 1e-9);
+  EXPECT_GT(without, 1e-3) << "the geometric-only run keeps stale UVs where vertices moved";
+  EXPECT_EQ(r.faces_out, static_cast<Index>(std::llround(0.1 * grid.num_faces())));
+}
+
+TEST(SimplifyAttributes, WeightedColoursStayInRangeAndTheBorderStaysSharp) {
+  // A bumpy sphere painted half red, half blue. With colour weights the merged wedges take optimised
+  // colours: they must stay valid colours, and the red/blue border must stay a thin line of mixed
+  // vertices rather than a smear.
+  Mesh m = bumpy_sphere(4, 0.005);
+  m.attributes.colours.resize(m.num_vertices(), 4);
+  for (Index v = 0; v < m.num_vertices(); ++v)
+    m.attributes.colours.row(v) = m.positions(v, 2) > 0 ? Eigen::RowVector4f(1, 0, 0, 1) : Eigen::RowVector4f(0, 0, 1, 1);
+  auto mixed = [](const Mesh& out) {
+    Index n = 0;
+    for (Index v = 0; v < out.num_vertices(); ++v)
+      n += out.attributes.colours(v, 0) > 0.05f && out.attributes.colours(v, 0) < 0.95f;
+    return n;
+  };
+  SimplifyOptions o;
+  o.target_ratio = 0.1;
+  o.attribute_weights.colours = 1.0;
+  const Mesh weighted = simplify(m, o).mesh;
+  validate(weighted);
+  EXPECT_TRUE(inspect(weighted).closed);
+  for (Index v = 0; v < weighted.num_vertices(); ++v)
+    for (int c = 0; c < 4; ++c) EXPECT_TRUE(weighted.attributes.colours(v, c) >= 0 && weighted.attributes.colours(v, c) <= 1);
+  EXPECT_LE(mixed(weighted), weighted.num_vertices() / 4);
+}
+
+}  // namespace
+}  // namespace lodkit

@@ -23,6 +23,7 @@ struct SimplifyCliOptions {
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
   bool measure = false, json = false;
   double max_normal_change = 60.0;
+  std::vector<double> attribute_weights;
   std::uint64_t seed = 1;
 };
 
@@ -57,6 +58,11 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   if (o.preserve_boundary) s.boundary_weight = 1000.0;
   s.preserve_topology = !o.allow_topology_change;
   s.max_normal_change_deg = o.max_normal_change;
+  if (!o.attribute_weights.empty()) {
+    if (o.attribute_weights.size() != 3)
+      throw Error("simplify: --attribute-weights takes three numbers: normals,uvs,colours");
+    s.attribute_weights = {o.attribute_weights[0], o.attribute_weights[1], o.attribute_weights[2]};
+  }
   s.seed = o.seed;
   const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
   if (show_progress)
@@ -124,6 +130,9 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                 "Skip the link condition and flip checks (shows how naive methods fail)");
   sub->add_option("--max-normal-change", opt->max_normal_change, "Largest turn of a face in one collapse (degrees)")
       ->check(CLI::Range(1.0, 180.0))->capture_default_str();
+  sub->add_option("--attribute-weights", opt->attribute_weights,
+                  "Weights of normal, UV and colour error against geometry, e.g. 0.5,1,1 (quadric; default off)")
+      ->delimiter(',')->check(CLI::NonNegativeNumber);
   sub->add_option("--seed", opt->seed, "Seed for hoppe's surface samples")->capture_default_str();
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
@@ -132,6 +141,7 @@ Examples:
   lodkit simplify bunny.ply -o bunny_10k.ply --faces 10000
   lodkit simplify scan.obj -o scan_small.obj --ratio 0.05 --measure
   lodkit simplify part.stl -o part_lo.stl --max-error 0.1% --lock-boundary
+  lodkit simplify spot.obj -o spot_small.obj --ratio 0.1 --attribute-weights 0,1,0
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};
 }

@@ -32,6 +32,15 @@
 namespace lodkit {
 
 enum class SimplifyMethod { Quadric, Hoppe, EdgeLength };
+
+/// Weights of attribute errors against geometric error (quadric method). An attribute difference of
+/// 1 (a UV unit, a colour channel's range, a unit normal's component) weighs like `weight` times the
+/// bounding-box diagonal. 0 leaves that attribute out of the cost (seams are kept either way).
+struct AttributeWeights {
+  double normals = 0.0;
+  double uvs = 0.0;
+  double colours = 0.0;
+};
 enum class Placement { Optimal, Endpoint, Midpoint };
 
 /// Why simplification stopped.
@@ -56,6 +65,9 @@ struct SimplifyOptions {
   double boundary_weight = 10.0;   ///< weight of boundary constraint planes (quadric); higher keeps borders
   double max_normal_change_deg = 60.0;  ///< how far a face may turn, in one collapse and in all
   double min_triangle_quality = 0.02;   ///< 4 sqrt(3) area / sum of squared edges, for new triangles
+  /// Attribute-aware quadrics (Garland & Heckbert 1998) for the attributes given a weight; the merged
+  /// wedges then also take the attribute values that minimise the error.
+  AttributeWeights attribute_weights{};
 
   /// Hoppe: random points sampled per input face (besides the vertices), and the seed.
   double hoppe_points_per_face = 1.0;

@@ -44,6 +44,7 @@ class Engine {
   Engine(const Mesh& mesh, const SimplifyOptions& options) : o_(options) {
     s_.input = &mesh;
     setup(mesh);
+    setup_attributes(mesh);
     switch (o_.method) {
       case SimplifyMethod::Quadric: cost_ = make_quadric_cost(o_); break;
       case SimplifyMethod::EdgeLength: cost_ = make_edge_length_cost(o_); break;
@@ -56,6 +57,7 @@ class Engine {
 
  private:
   void setup(const Mesh& mesh);
+  void setup_attributes(const Mesh& mesh);
   // Checks are split by cost: the cheap ones (flags, shared faces, seam wedges) decide where the
   // surviving vertex may go and run whenever a candidate is scored; the link condition and the
   // geometric checks run once, when a candidate reaches the top of the queue.
@@ -77,14 +79,14 @@ class Engine {
   std::vector<std::uint32_t> version_;
   std::vector<std::uint32_t> dirty_;  // bumped when a point's neighbourhood energy changed (wide updates)
   double cos_max_turn_ = 0;
-  // Scratch, reused across calls; the wedge map is valid for the last structure() call.
+  // Scratch, reused across calls.
   std::vector<Index> shared_, ring_u_, ring_v_, ring_tmp_;
-  std::pair<Index, Index> wedge_map_[2];
-  int wedge_map_size_ = 0;
   // Result bookkeeping.
   double max_error_ = 0;
   Index collapses_ = 0, locked_ = 0, dropped_ = 0;
   std::vector<CollapseRecord> records_;
+  std::vector<double> attribute_scale_;     // per attribute dimension: weight x diagonal
+  std::array<bool, 3> attribute_layout_{};  // normals, uvs, colours in the attribute vector
 };
 
 void Engine::setup(const Mesh& mesh) {
@@ -178,6 +180,43 @@ void Engine::setup(const Mesh& mesh) {
   }
 }
 
+void Engine::setup_attributes(const Mesh& mesh) {
+  const AttributeWeights& w = o_.attribute_weights;
+  const Attributes& a = mesh.attributes;
+  const bool normals = w.normals > 0 && mesh.has_normals(), uvs = w.uvs > 0 && mesh.has_uvs(),
+             colours = w.colours > 0 && mesh.has_colours();
+  const int k = 3 * normals + 2 * uvs + 4 * colours;
+  if (k == 0) return;
+  const Eigen::AlignedBox3d box = bounding_box(mesh);
+  const double diagonal = box.isEmpty() ? 1.0 : std::max(box.diagonal().norm(), 1e-300);
+  attribute_scale_.clear();
+  for (int i = 0; i < 3 * normals; ++i) attribute_scale_.push_back(w.normals * diagonal);
+  for (int i = 0; i < 2 * uvs; ++i) attribute_scale_.push_back(w.uvs * diagonal);
+  for (int i = 0; i < 4 * colours; ++i) attribute_scale_.push_back(w.colours * diagonal);
+  attribute_layout_ = {normals, uvs, colours};
+  const Index nv = mesh.num_vertices();
+  s_.wedge_value.assign(static_cast<std::size_t>(k) * nv, 0.0);
+  for (Index v = 0; v < nv; ++v) {
+    double* out = &s_.wedge_value[static_cast<std::size_t>(k) * v];
+    int j = 0;
+    if (normals) for (int i = 0; i < 3; ++i, ++j) out[j] = a.normals(v, i) * attribute_scale_[j];
+    if (uvs) for (int i = 0; i < 2; ++i, ++j) out[j] = a.uvs(v, i) * attribute_scale_[j];
+    if (colours) for (int i = 0; i < 4; ++i, ++j) out[j] = a.colours(v, i) * attribute_scale_[j];
+  }
+  s_.attribute_quadrics.reset(k, static_cast<std::size_t>(nv));
+  for (Index f = 0; f < mesh.num_faces(); ++f) {
+    if (s_.face_dead[f]) continue;
+    Eigen::Vector3d p[3];
+    const double* values[3];
+    for (int c = 0; c < 3; ++c) {
+      p[c] = s_.position[s_.corner_point(f, c)];
+      values[c] = &s_.wedge_value[static_cast<std::size_t>(k) * s_.face[f][c]];
+    }
+    const double area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm();
+    for (int c = 0; c < 3; ++c) s_.attribute_quadrics.add_face(static_cast<std::size_t>(s_.face[f][c]), p, values, area);
+  }
+}
+
 void Engine::neighbours(Index p, std::vector<Index>& out) {
   out.clear();
   for (Index f : s_.faces_of(p))
@@ -208,24 +247,24 @@ Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condit
       if (s_.corner_point(f, k) == p) return s_.face[f][k];
     return Index(-1);
   };
-  wedge_map_size_ = 0;
+  s_.wedge_map_size = 0;
   for (Index f : shared_) {
     const Index wu = wedge_at(f, u), wv = wedge_at(f, v);
     bool known = false;
-    for (int i = 0; i < wedge_map_size_; ++i) {
-      if (wedge_map_[i].first == wu) {
-        if (wedge_map_[i].second != wv) return Rejection::Seam;
+    for (int i = 0; i < s_.wedge_map_size; ++i) {
+      if (s_.wedge_map[i].first == wu) {
+        if (s_.wedge_map[i].second != wv) return Rejection::Seam;
         known = true;
-      } else if (wedge_map_[i].second == wv) {
+      } else if (s_.wedge_map[i].second == wv) {
         return Rejection::Seam;
       }
     }
-    if (!known) wedge_map_[wedge_map_size_++] = {wu, wv};
+    if (!known) s_.wedge_map[s_.wedge_map_size++] = {wu, wv};
   }
   for (Index f : fu) {
     const Index wu = wedge_at(f, u);
     bool mapped = false;
-    for (int i = 0; i < wedge_map_size_; ++i) mapped |= wedge_map_[i].first == wu;
+    for (int i = 0; i < s_.wedge_map_size; ++i) mapped |= s_.wedge_map[i].first == wu;
     if (!mapped) return Rejection::Seam;
   }
 
@@ -354,11 +393,20 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
     for (int k = 0; k < 3; ++k) {
       if (s_.corner_point(f, k) != u) continue;
       const Index old = s_.face[f][k];
-      for (int i = 0; i < wedge_map_size_; ++i)
-        if (wedge_map_[i].first == old) s_.face[f][k] = wedge_map_[i].second;
+      for (int i = 0; i < s_.wedge_map_size; ++i)
+        if (s_.wedge_map[i].first == old) s_.face[f][k] = s_.wedge_map[i].second;
       if (rec) rec->changed_corners.push_back({f, k, old});
     }
     s_.point_faces[v].push_back(f);
+  }
+  if (s_.attribute_quadrics.enabled()) {
+    // The kept wedges take the attribute values that minimise the merged attribute error.
+    const std::size_t k = static_cast<std::size_t>(s_.attribute_quadrics.dims());
+    for (int i = 0; i < s_.wedge_map_size; ++i) {
+      const auto [wu, wv] = s_.wedge_map[i];
+      s_.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), c.position, &s_.wedge_value[k * wv]);
+      s_.attribute_quadrics.merge(std::size_t(wv), std::size_t(wu));
+    }
   }
   s_.point_faces[u].clear();
   s_.position[v] = c.position;
@@ -498,6 +546,24 @@ SimplifyResult Engine::run(Index target) {
     if (in.has_normals()) out.attributes.normals.row(i) = a.normals.row(w);
     if (in.has_uvs()) out.attributes.uvs.row(i) = a.uvs.row(w);
     if (in.has_colours()) out.attributes.colours.row(i) = a.colours.row(w);
+  }
+  if (s_.attribute_quadrics.enabled()) {
+    // Attributes the cost optimised come from the wedges' current values.
+    const std::size_t k = static_cast<std::size_t>(s_.attribute_quadrics.dims());
+    for (Index i = 0; i < nv; ++i) {
+      const double* value = &s_.wedge_value[k * static_cast<std::size_t>(result.vertex_origin[i])];
+      int j = 0;
+      if (attribute_layout_[0]) {
+        Eigen::Vector3d n;
+        for (int d = 0; d < 3; ++d, ++j) n[d] = value[j] / attribute_scale_[j];
+        if (n.norm() > 0) out.attributes.normals.row(i) = n.normalized().transpose();
+      }
+      if (attribute_layout_[1])
+        for (int d = 0; d < 2; ++d, ++j) out.attributes.uvs(i, d) = value[j] / attribute_scale_[j];
+      if (attribute_layout_[2])
+        for (int d = 0; d < 4; ++d, ++j)
+          out.attributes.colours(i, d) = static_cast<float>(std::clamp(value[j] / attribute_scale_[j], 0.0, 1.0));
+    }
   }
   Index row = 0;
   for (std::size_t f = 0; f < s_.face.size(); ++f) {

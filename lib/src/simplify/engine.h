@@ -15,6 +15,7 @@
 #include <memory>
 #include <vector>
 
+#include "simplify/attribute_quadric.h"
 #include "simplify/quadric.h"
 
 namespace lodkit::detail {
@@ -37,6 +38,13 @@ struct EngineState {
   std::vector<std::uint8_t> face_dead;
   std::vector<Eigen::Vector3f> face_normal0;    ///< each face's unit normal in the input
   Index alive_faces = 0;
+
+  /// Per-wedge attribute quadrics and values (scaled), when attribute weights are on.
+  AttributeQuadrics attribute_quadrics;
+  std::vector<double> wedge_value;  ///< k values per wedge
+  /// The wedge map of the last structural check: each wedge of u -> the wedge of v it merges into.
+  std::pair<Index, Index> wedge_map[2];
+  int wedge_map_size = 0;
 
   Index corner_point(Index f, int k) const { return point_of[face[f][k]]; }
   bool has(Index p, PointFlag flag) const { return flags[p] & flag; }

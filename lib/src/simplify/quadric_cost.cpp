@@ -34,6 +34,16 @@ class QuadricCost final : public CostModel {
       consider(pv, have);
     }
     out.error = quadric_distance(q, out.position);
+    if (s.attribute_quadrics.enabled()) {
+      // Attribute error of every wedge pair that merges, at their best attribute values.
+      double value[16];
+      for (int i = 0; i < s.wedge_map_size; ++i) {
+        const auto [wu, wv] = s.wedge_map[i];
+        const std::size_t k = static_cast<std::size_t>(s.attribute_quadrics.dims());
+        std::copy_n(&s.wedge_value[k * wv], k, value);
+        out.cost += s.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), out.position, value);
+      }
+    }
     return have;
   }
 
