@@ -6,6 +6,7 @@
 //
 //   lodkit_bench_simplify [--targets 0.1,0.01] [--methods quadric,hoppe,...] [--csv FILE]
 //                         [--hoppe-max-faces N] MESH...
+#include <lodkit/decimate.h>
 #include <lodkit/inspect.h>
 #include <lodkit/io.h>
 #include <lodkit/metrics.h>
@@ -44,6 +45,11 @@ bench::PeerRun run_method(const std::string& method, const Mesh& mesh, Index tar
   if (method == "meshopt-sloppy") return bench::run_meshoptimizer(mesh, target, true);
   if (method == "openmesh") return bench::run_openmesh(mesh, target);
   if (method == "cgal") return bench::run_cgal(mesh, target);
+  if (method == "schroeder") {
+    const auto t0 = std::chrono::steady_clock::now();
+    DecimateResult r = decimate(mesh, {.target_faces = target});
+    return {std::move(r.mesh), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()};
+  }
   SimplifyOptions o;
   o.method = *parse_method(method);
   o.target_faces = target;
@@ -101,7 +107,7 @@ std::vector<std::string> split(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string> methods{"quadric", "hoppe", "edge-length", "meshopt", "meshopt-sloppy", "openmesh", "cgal"};
+  std::vector<std::string> methods{"quadric", "hoppe", "edge-length", "schroeder", "meshopt", "meshopt-sloppy", "openmesh", "cgal"};
   std::vector<double> targets{0.1, 0.01};
   std::vector<std::string> inputs;
   std::string csv_path;

@@ -8,7 +8,7 @@
 
 #include <random>
 
-#include "metrics/aabb_tree.h"
+#include "test_util.h"
 
 namespace lodkit {
 namespace {
@@ -20,23 +20,6 @@ Mesh bumpy_sphere(int subdivisions, double amplitude) {
   std::uniform_real_distribution<double> noise(-amplitude, amplitude);
   for (Index v = 0; v < m.num_vertices(); ++v) m.positions.row(v) *= 1.0 + noise(rng);
   return m;
-}
-
-// Output faces whose normal points against the nearest input face's normal.
-Index flipped_faces(const Mesh& input, const Mesh& output) {
-  const detail::AabbTree tree(input);
-  Index flipped = 0;
-  for (Index f = 0; f < output.num_faces(); ++f) {
-    const Eigen::Vector3d a = output.positions.row(output.triangles(f, 0)), b = output.positions.row(output.triangles(f, 1)),
-                          c = output.positions.row(output.triangles(f, 2));
-    const Eigen::Vector3d n = (b - a).cross(c - a);
-    const auto hit = tree.closest((a + b + c) / 3.0);
-    const Eigen::Vector3d p = input.positions.row(input.triangles(hit.face, 0)),
-                          q = input.positions.row(input.triangles(hit.face, 1)),
-                          r = input.positions.row(input.triangles(hit.face, 2));
-    if (n.dot((q - p).cross(r - p)) < 0) ++flipped;
-  }
-  return flipped;
 }
 
 struct Case {
@@ -73,7 +56,7 @@ TEST_P(EveryMethod, KeepsTopologyAndOrientationAndHitsTheTarget) {
       EXPECT_EQ(after.components, before.components);
       EXPECT_EQ(after.closed, before.closed);
       EXPECT_EQ(after.degenerate_faces, 0);
-      EXPECT_EQ(flipped_faces(c.mesh, r.mesh), 0);
+      EXPECT_EQ(test::flipped_faces(c.mesh, r.mesh), 0);
       const Index target = static_cast<Index>(std::llround(ratio * c.mesh.num_faces()));
       if (r.reason == StopReason::TargetReached) {
         EXPECT_LE(r.faces_out, target);

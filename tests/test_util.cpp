@@ -1,5 +1,7 @@
 #include "test_util.h"
 
+#include "metrics/aabb_tree.h"
+
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -51,6 +53,22 @@ Mesh single_triangle() {
   m.triangles.resize(1, 3);
   m.triangles << 0, 1, 2;
   return m;
+}
+
+Index flipped_faces(const Mesh& input, const Mesh& output) {
+  const detail::AabbTree tree(input);
+  Index flipped = 0;
+  for (Index f = 0; f < output.num_faces(); ++f) {
+    const Eigen::Vector3d a = output.positions.row(output.triangles(f, 0)),
+                          b = output.positions.row(output.triangles(f, 1)),
+                          c = output.positions.row(output.triangles(f, 2));
+    const auto hit = tree.closest((a + b + c) / 3.0);
+    const Eigen::Vector3d p = input.positions.row(input.triangles(hit.face, 0)),
+                          q = input.positions.row(input.triangles(hit.face, 1)),
+                          r = input.positions.row(input.triangles(hit.face, 2));
+    if ((b - a).cross(c - a).dot((q - p).cross(r - p)) < 0) ++flipped;
+  }
+  return flipped;
 }
 
 }  // namespace lodkit::test

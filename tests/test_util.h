@@ -29,4 +29,8 @@ Mesh tetrahedron();
 /// One triangle.
 Mesh single_triangle();
 
+/// Faces of `output` whose normal points against the normal of the nearest face of `input` (the
+/// "flipped" count of the benchmarks).
+Index flipped_faces(const Mesh& input, const Mesh& output);
+
 }  // namespace lodkit::test

@@ -1,4 +1,5 @@
 // lodkit simplify: edge-collapse simplification (quadric, hoppe, edge-length).
+#include <lodkit/decimate.h>
 #include <lodkit/error.h>
 #include <lodkit/metrics.h>
 #include <lodkit/simplify.h>
@@ -24,6 +25,8 @@ struct SimplifyCliOptions {
   bool measure = false, json = false;
   double max_normal_change = 60.0;
   std::vector<double> attribute_weights;
+  double feature_angle = 30.0, aspect_ratio = 0.1;
+  bool accumulate_error = false;
   std::uint64_t seed = 1;
 };
 
@@ -43,8 +46,52 @@ double parse_error(const std::string& text, double diagonal) {
   return percent ? v / 100.0 * diagonal : v;
 }
 
+int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {
+  DecimateOptions d;
+  d.target_faces = o.faces;
+  d.target_ratio = o.ratio;
+  if (o.max_error) d.max_error = parse_error(*o.max_error, diagonal);
+  d.feature_angle_deg = o.feature_angle;
+  d.aspect_ratio = o.aspect_ratio;
+  d.accumulate_error = o.accumulate_error;
+  const DecimateResult r = decimate(mesh, d);
+  write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
+  std::optional<Comparison> measured;
+  if (o.measure) measured = compare(mesh, r.mesh);
+  const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
+  const auto& c = r.remaining_by_class;
+  if (o.json) {
+    nlohmann::json j{{"input", o.input}, {"output", o.output}, {"method", "schroeder"}, {"faces_in", r.faces_in},
+                     {"faces_out", r.faces_out}, {"vertices_in", r.vertices_in}, {"vertices_out", r.vertices_out},
+                     {"removed", r.removed}, {"seconds", r.seconds}, {"error_estimate", r.error},
+                     {"error_estimate_percent", r.error * pct}, {"target_reached", r.target_reached},
+                     {"reason_text", r.reason_text},
+                     {"remaining", {{"simple", c[0]}, {"complex", c[1]}, {"boundary", c[2]}, {"interior_edge", c[3]},
+                                    {"corner", c[4]}, {"above_threshold", r.remaining_above_threshold},
+                                    {"no_triangulation", r.remaining_no_triangulation}}}};
+    if (measured)
+      j["measured"] = {{"hausdorff", measured->hausdorff}, {"hausdorff_percent", measured->percent(measured->hausdorff)},
+                       {"rms", measured->rms}, {"rms_percent", measured->percent(measured->rms)}};
+    fmt::print("{}\n", j.dump(2));
+  } else if (!global.quiet) {
+    fmt::print(stderr, "simplify (schroeder): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", thousands(r.faces_in),
+               thousands(r.faces_out), thousands(r.vertices_in), thousands(r.vertices_out), r.seconds);
+    fmt::print(stderr, "  largest removal error {:.6g} ({:.4f}% of the diagonal){}\n", r.error, r.error * pct,
+               d.accumulate_error ? ", accumulated" : "");
+    if (measured)
+      fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%)\n", measured->hausdorff,
+                 measured->percent(measured->hausdorff), measured->rms, measured->percent(measured->rms));
+    fmt::print(stderr, "  {}\n", r.reason_text);
+  }
+  return 0;
+}
+
 int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   const Mesh mesh = read_input(o.input, o.format);
+  if (o.method == "schroeder") {
+    const auto b = bounding_box(mesh);
+    return run_schroeder(o, global, mesh, b.isEmpty() ? 0.0 : b.diagonal().norm());
+  }
   SimplifyOptions s;
   s.method = *parse_method(o.method);
   s.placement = o.placement == "endpoint" ? Placement::Endpoint
@@ -117,8 +164,8 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("input", opt->input, "Input mesh, or - for stdin (with --format)")->required();
   sub->add_option("-o,--output", opt->output, "Output mesh, or - for stdout (with --format)")->required();
   sub->add_option("--format", opt->format, "Format of stdin/stdout")->check(format_validator());
-  sub->add_option("--method", opt->method, "quadric (default), hoppe or edge-length")
-      ->check(CLI::IsMember({"quadric", "hoppe", "edge-length"}))->capture_default_str();
+  sub->add_option("--method", opt->method, "quadric (default), hoppe, edge-length, or schroeder (vertex decimation)")
+      ->check(CLI::IsMember({"quadric", "hoppe", "edge-length", "schroeder"}))->capture_default_str();
   sub->add_option("--placement", opt->placement, "optimal, endpoint or midpoint")
       ->check(CLI::IsMember({"optimal", "endpoint", "midpoint"}))->capture_default_str();
   sub->add_option("--faces", opt->faces, "Target face count")->check(CLI::NonNegativeNumber);
@@ -133,6 +180,11 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--attribute-weights", opt->attribute_weights,
                   "Weights of normal, UV and colour error against geometry, e.g. 0.5,1,1 (quadric; default off)")
       ->delimiter(',')->check(CLI::NonNegativeNumber);
+  sub->add_option("--feature-angle", opt->feature_angle, "schroeder: dihedral angle that makes a feature edge (degrees)")
+      ->check(CLI::Range(0.1, 180.0))->capture_default_str();
+  sub->add_option("--aspect-ratio", opt->aspect_ratio, "schroeder: smallest split-line quality for re-triangulation")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_flag("--accumulate-error", opt->accumulate_error, "schroeder: add each removal's error to its neighbours");
   sub->add_option("--seed", opt->seed, "Seed for hoppe's surface samples")->capture_default_str();
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
@@ -142,6 +194,7 @@ Examples:
   lodkit simplify scan.obj -o scan_small.obj --ratio 0.05 --measure
   lodkit simplify part.stl -o part_lo.stl --max-error 0.1% --lock-boundary
   lodkit simplify spot.obj -o spot_small.obj --ratio 0.1 --attribute-weights 0,1,0
+  lodkit simplify part.obj -o part_lo.obj --method schroeder --max-error 0.05% --feature-angle 30
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};
 }

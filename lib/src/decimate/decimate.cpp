@@ -1,0 +1,394 @@
+#include <lodkit/decimate.h>
+#include <lodkit/error.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+#include <numbers>
+#include <vector>
+
+namespace lodkit {
+namespace {
+
+constexpr int kClasses = 5;
+
+// Which classes may be removed, and against what (the paper's table).
+enum class Criterion { Keep, Plane, Line };
+constexpr Criterion kRule[kClasses] = {
+    /* Simple       */ Criterion::Plane,  // distance to the average plane of the star
+    /* Complex      */ Criterion::Keep,   // non-manifold or otherwise not a single fan
+    /* Boundary     */ Criterion::Line,   // distance to the line through its two boundary neighbours
+    /* InteriorEdge */ Criterion::Line,   // distance to the line through its two feature neighbours
+    /* Corner       */ Criterion::Keep,   // one or more than two feature edges, or a sharp boundary
+};
+
+struct Star {
+  VertexClass cls = VertexClass::Complex;
+  std::vector<Index> loop;      // neighbours in counter-clockwise order
+  bool closed = false;          // interior vertex (cycle) or boundary vertex (open chain)
+  std::vector<int> features;    // positions in `loop` of feature-edge neighbours (interior only)
+  std::vector<Index> faces;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero(), centre = Eigen::Vector3d::Zero();
+};
+
+using Tri = std::array<Index, 3>;
+
+class Decimator {
+ public:
+  Decimator(const Mesh& mesh, const DecimateOptions& o) : o_(o) {
+    const Eigen::VectorX<Index> cls = position_classes(mesh);
+    std::vector<Index> point_of_class(static_cast<std::size_t>(mesh.num_vertices()), -1);
+    std::vector<Index> point_of(static_cast<std::size_t>(mesh.num_vertices()));
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+      Index& p = point_of_class[cls[v]];
+      if (p < 0) p = static_cast<Index>(position_.size()), position_.push_back(mesh.positions.row(v).transpose());
+      point_of[v] = p;
+    }
+    point_faces_.resize(position_.size());
+    for (Index f = 0; f < mesh.num_faces(); ++f) {
+      const Tri t{point_of[mesh.triangles(f, 0)], point_of[mesh.triangles(f, 1)], point_of[mesh.triangles(f, 2)]};
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+      add_face(t);
+    }
+    error_.assign(position_.size(), 0.0);
+    removed_.assign(position_.size(), 0);
+    cos_feature_ = std::cos(o.feature_angle_deg * std::numbers::pi / 180.0);
+  }
+
+  Index alive_faces() const { return alive_faces_; }
+  Index points() const { return static_cast<Index>(position_.size()); }
+  bool removed(Index v) const { return removed_[v] != 0; }
+
+  // Builds the star of v and classifies it.
+  void star(Index v, Star& s) {
+    s = Star{};
+    s.faces.clear();
+    std::vector<std::pair<Index, Index>> next;  // a -> b for each face (v, a, b)
+    for (Index f : point_faces_[v]) {
+      if (!alive_[f]) continue;
+      const Tri& t = face_[f];
+      const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+      next.push_back({t[(k + 1) % 3], t[(k + 2) % 3]});
+      s.faces.push_back(f);
+      const Eigen::Vector3d a = position_[t[0]], b = position_[t[1]], c = position_[t[2]];
+      const Eigen::Vector3d n2 = (b - a).cross(c - a);
+      s.normal += n2;
+      s.centre += 0.5 * n2.norm() * (a + b + c) / 3.0;
+    }
+    if (next.empty()) return;
+    double area = 0;
+    for (Index f : s.faces) {
+      const Tri& t = face_[f];
+      area += 0.5 * (position_[t[1]] - position_[t[0]]).cross(position_[t[2]] - position_[t[0]]).norm();
+    }
+    if (!(area > 0) || !(s.normal.norm() > 0)) return;
+    s.centre /= area;
+    s.normal.normalize();
+    // Each neighbour may start at most one face and end at most one face.
+    auto find_next = [&](Index a) -> Index {
+      Index found = -1;
+      for (const auto& [x, y] : next)
+        if (x == a) {
+          if (found >= 0) return -2;
+          found = y;
+        }
+      return found;
+    };
+    Index start = next[0].first;
+    int starts = 0;
+    for (const auto& [x, y] : next) {
+      bool has_prev = false;
+      int as_first = 0;
+      for (const auto& [x2, y2] : next) has_prev |= y2 == x, as_first += x2 == x;
+      if (as_first > 1) return;  // non-manifold
+      if (!has_prev) start = x, ++starts;
+    }
+    if (starts > 1) return;  // several fans: a bow tie
+    s.closed = starts == 0;
+    Index a = start;
+    for (std::size_t guard = 0; guard <= next.size(); ++guard) {
+      s.loop.push_back(a);
+      const Index b = find_next(a);
+      if (b == -2) return;
+      if (b < 0 || b == start) break;
+      a = b;
+    }
+    if (s.loop.size() != (s.closed ? next.size() : next.size() + 1)) return;  // not a single fan
+    // Feature edges: the edge (v, loop[i]) between faces (v, loop[i-1], loop[i]) and (v, loop[i], loop[i+1]).
+    const std::size_t n = s.loop.size();
+    auto face_normal = [&](Index p, Index q) {
+      const Eigen::Vector3d nn = (position_[p] - position_[v]).cross(position_[q] - position_[v]);
+      return Eigen::Vector3d(nn.norm() > 0 ? Eigen::Vector3d(nn.normalized()) : nn);
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!s.closed && (i == 0 || i + 1 == n)) continue;  // boundary edges
+      const Index prev = s.loop[(i + n - 1) % n], w = s.loop[i], nxt = s.loop[(i + 1) % n];
+      if (face_normal(prev, w).dot(face_normal(w, nxt)) < cos_feature_) s.features.push_back(static_cast<int>(i));
+    }
+    if (!s.closed) s.cls = s.features.empty() ? VertexClass::Boundary : VertexClass::Corner;
+    else if (s.features.empty()) s.cls = VertexClass::Simple;
+    else if (s.features.size() == 2) s.cls = VertexClass::InteriorEdge;
+    else s.cls = VertexClass::Corner;
+  }
+
+  // Distance of v from what it must stay close to; negative when its class is kept.
+  double removal_error(Index v, const Star& s) const {
+    const Eigen::Vector3d& p = position_[v];
+    switch (kRule[static_cast<int>(s.cls)]) {
+      case Criterion::Keep: return -1;
+      case Criterion::Plane: return std::abs(s.normal.dot(p - s.centre));
+      case Criterion::Line: {
+        const Index a = s.closed ? s.loop[s.features[0]] : s.loop.front();
+        const Index b = s.closed ? s.loop[s.features[1]] : s.loop.back();
+        const Eigen::Vector3d d = position_[b] - position_[a];
+        if (!(d.norm() > 0)) return -1;
+        return (p - position_[a]).cross(d).norm() / d.norm();
+      }
+    }
+    return -1;
+  }
+
+  // Tries to remove v: triangulate its hole and apply. Returns false if no acceptable triangulation.
+  bool remove(Index v, const Star& s, double error) {
+    new_faces_.clear();
+    bool ok;
+    if (s.closed && s.cls == VertexClass::InteriorEdge) {
+      // The feature line must survive: split along it first.
+      const int i = s.features[0], j = s.features[1];
+      std::vector<Index> a(s.loop.begin() + i, s.loop.begin() + j + 1), b(s.loop.begin() + j, s.loop.end());
+      b.insert(b.end(), s.loop.begin(), s.loop.begin() + i + 1);
+      ok = !edge_exists(s.loop[i], s.loop[j]) && (a.size() < 3 || split(a, s.normal)) && (b.size() < 3 || split(b, s.normal));
+      if (a.size() < 3 || b.size() < 3) ok = false;  // the feature neighbours are adjacent: nothing to split
+    } else {
+      if (!s.closed && edge_exists(s.loop.front(), s.loop.back())) return false;  // would close a pinch
+      ok = s.loop.size() >= 3 && split(s.loop, s.normal);
+    }
+    if (!ok) return false;
+    // Every new triangle faces the same way as the star and is not already in the mesh.
+    for (const Tri& t : new_faces_) {
+      const Eigen::Vector3d n = (position_[t[1]] - position_[t[0]]).cross(position_[t[2]] - position_[t[0]]);
+      if (!(n.dot(s.normal) > 0)) return false;
+      if (face_exists(t)) return false;
+    }
+    if (static_cast<Index>(new_faces_.size()) != static_cast<Index>(s.faces.size()) - 2 + (s.closed ? 0 : 1))
+      return false;
+    for (Index f : s.faces) alive_[f] = 0, --alive_faces_;
+    for (const Tri& t : new_faces_) add_face(t);
+    removed_[v] = 1;
+    point_faces_[v].clear();
+    for (Index w : s.loop) {
+      auto& list = point_faces_[w];
+      list.erase(std::remove_if(list.begin(), list.end(), [&](Index f) { return !alive_[f]; }), list.end());
+      if (o_.accumulate_error) error_[w] += error;
+    }
+    return true;
+  }
+
+  double accumulated(Index v) const { return error_[v]; }
+
+  Mesh output() const {
+    Mesh m;
+    std::vector<Index> id(position_.size(), -1);
+    Index nv = 0, nf = 0;
+    for (std::size_t f = 0; f < face_.size(); ++f)
+      if (alive_[f]) {
+        ++nf;
+        for (Index p : face_[f])
+          if (id[p] < 0) id[p] = nv++;
+      }
+    m.positions.resize(nv, 3);
+    for (std::size_t p = 0; p < position_.size(); ++p)
+      if (id[p] >= 0) m.positions.row(id[p]) = position_[p].transpose();
+    m.triangles.resize(nf, 3);
+    Index row = 0;
+    for (std::size_t f = 0; f < face_.size(); ++f)
+      if (alive_[f]) {
+        for (int k = 0; k < 3; ++k) m.triangles(row, k) = id[face_[f][k]];
+        ++row;
+      }
+    return m;
+  }
+
+ private:
+  void add_face(const Tri& t) {
+    const auto f = static_cast<Index>(face_.size());
+    face_.push_back(t);
+    alive_.push_back(1);
+    ++alive_faces_;
+    for (Index p : t) point_faces_[p].push_back(f);
+  }
+
+  bool edge_exists(Index a, Index b) const {
+    for (Index f : point_faces_[a])
+      if (alive_[f] && (face_[f][0] == b || face_[f][1] == b || face_[f][2] == b)) return true;
+    return false;
+  }
+
+  bool face_exists(const Tri& t) const {
+    for (Index f : point_faces_[t[0]]) {
+      if (!alive_[f]) continue;
+      int shared = 0;
+      for (Index p : face_[f]) shared += p == t[1] || p == t[2];
+      if (shared == 2) return true;
+    }
+    return false;
+  }
+
+  // Recursive loop splitting: the best split line (by min distance of loop vertices to the split
+  // plane / line length) whose plane, holding the line and the average normal, has every other loop
+  // vertex strictly on its own side.
+  bool split(const std::vector<Index>& loop, const Eigen::Vector3d& normal) {
+    const std::size_t n = loop.size();
+    if (n == 3) {
+      new_faces_.push_back({loop[0], loop[1], loop[2]});
+      return true;
+    }
+    double best_score = -1;
+    std::size_t best_i = 0, best_j = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = i + 2; j < n; ++j) {
+        if (i == 0 && j == n - 1) continue;  // adjacent around the loop
+        const Eigen::Vector3d& a = position_[loop[i]];
+        const Eigen::Vector3d line = position_[loop[j]] - a;
+        const double length = line.norm();
+        const Eigen::Vector3d m = line.cross(normal);
+        if (!(length > 0) || !(m.norm() > 0)) continue;
+        const Eigen::Vector3d plane = m.normalized();
+        double min_distance = INFINITY;
+        bool valid = true;
+        for (std::size_t k = 0; k < n && valid; ++k) {
+          if (k == i || k == j) continue;
+          const double d = plane.dot(position_[loop[k]] - a);
+          // For a counter-clockwise loop, the vertices between i and j lie right of the line i -> j.
+          const bool between = k > i && k < j;
+          if (between ? !(d > 0) : !(d < 0)) valid = false;
+          min_distance = std::min(min_distance, std::abs(d));
+        }
+        if (!valid) continue;
+        const double score = min_distance / length;
+        if (score > best_score && !edge_exists(loop[i], loop[j])) best_score = score, best_i = i, best_j = j;
+      }
+    if (best_score < o_.aspect_ratio) return false;
+    std::vector<Index> first(loop.begin() + best_i, loop.begin() + best_j + 1);
+    std::vector<Index> second(loop.begin() + best_j, loop.end());
+    second.insert(second.end(), loop.begin(), loop.begin() + best_i + 1);
+    return split(first, normal) && split(second, normal);
+  }
+
+  const DecimateOptions& o_;
+  std::vector<Eigen::Vector3d> position_;
+  std::vector<Tri> face_;
+  std::vector<char> alive_;
+  std::vector<std::vector<Index>> point_faces_;
+  std::vector<double> error_;
+  std::vector<char> removed_;
+  std::vector<Tri> new_faces_;
+  Index alive_faces_ = 0;
+  double cos_feature_ = 0;
+};
+
+}  // namespace
+
+std::array<Index, 5> count_vertex_classes(const Mesh& mesh, double feature_angle_deg) {
+  validate(mesh, "decimate");
+  DecimateOptions o;
+  o.feature_angle_deg = feature_angle_deg;
+  Decimator d(mesh, o);
+  std::array<Index, 5> counts{};
+  Star s;
+  for (Index v = 0; v < d.points(); ++v) {
+    d.star(v, s);
+    ++counts[static_cast<int>(s.cls)];
+  }
+  return counts;
+}
+
+DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(mesh, "decimate");
+  if (options.target_ratio && !(*options.target_ratio >= 0 && *options.target_ratio <= 1))
+    throw Error(fmt::format("decimate: ratio must be between 0 and 1, got {}", *options.target_ratio));
+  if (options.max_error && !(*options.max_error >= 0))
+    throw Error(fmt::format("decimate: max error must not be negative, got {}", *options.max_error));
+  if (!(options.feature_angle_deg > 0 && options.feature_angle_deg <= 180))
+    throw Error("decimate: feature angle must be in (0, 180] degrees");
+  if (!(options.aspect_ratio >= 0)) throw Error("decimate: aspect ratio must not be negative");
+
+  DecimateResult r;
+  r.faces_in = mesh.num_faces();
+  r.vertices_in = mesh.num_vertices();
+  Index target = 0;
+  if (options.target_faces) target = std::max(target, *options.target_faces);
+  if (options.target_ratio) target = std::max(target, static_cast<Index>(std::llround(*options.target_ratio * mesh.num_faces())));
+  const auto box = bounding_box(mesh);
+  const double diagonal = box.isEmpty() ? 0.0 : box.diagonal().norm();
+  const bool has_target = options.target_faces || options.target_ratio;
+  const double max_error = options.max_error.value_or(has_target ? diagonal : 0.005 * diagonal);
+
+  // Thresholds that grow to max_error: exact removals first, then geometric steps.
+  std::vector<double> thresholds{0.0};
+  for (int k = 12; k >= 0; --k) thresholds.push_back(max_error * std::pow(2.0, -k));
+
+  Decimator d(mesh, options);
+  Star s;
+  for (double t : thresholds) {
+    for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v) {
+      if (d.removed(v)) continue;
+      d.star(v, s);
+      const double e = d.removal_error(v, s);
+      if (e < 0) continue;
+      const double bound = e + (options.accumulate_error ? d.accumulated(v) : 0.0);
+      if (bound > t) continue;
+      const Index removes = s.closed ? 2 : 1;
+      if (d.alive_faces() - removes < target && removes > 1) continue;  // would overshoot by one
+      if (d.remove(v, s, e)) {
+        ++r.removed;
+        r.error = std::max(r.error, bound);
+      }
+    }
+    if (d.alive_faces() <= target) break;
+  }
+  if (has_target && d.alive_faces() == target + 1) {
+    // Only two-face removals are left (a closed mesh has an even face count): land one below.
+    for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v) {
+      if (d.removed(v)) continue;
+      d.star(v, s);
+      const double e = d.removal_error(v, s);
+      if (e < 0 || e + (options.accumulate_error ? d.accumulated(v) : 0.0) > max_error) continue;
+      if (d.remove(v, s, e)) ++r.removed, r.error = std::max(r.error, e + (options.accumulate_error ? d.accumulated(v) : 0.0));
+    }
+  }
+
+  r.mesh = d.output();
+  r.faces_out = r.mesh.num_faces();
+  r.vertices_out = r.mesh.num_vertices();
+  r.target_reached = has_target ? r.faces_out <= target : true;
+  // What is left, and why it stayed.
+  for (Index v = 0; v < d.points(); ++v) {
+    if (d.removed(v)) continue;
+    d.star(v, s);
+    if (s.faces.empty()) continue;
+    ++r.remaining_by_class[static_cast<int>(s.cls)];
+    const double e = d.removal_error(v, s);
+    if (e < 0) continue;
+    if (e + (options.accumulate_error ? d.accumulated(v) : 0.0) > max_error) ++r.remaining_above_threshold;
+    else ++r.remaining_no_triangulation;
+  }
+  const auto& c = r.remaining_by_class;
+  const std::string classes = fmt::format("{} simple, {} complex, {} boundary, {} interior-edge, {} corner", c[0], c[1],
+                                          c[2], c[3], c[4]);
+  if (has_target && r.target_reached) {
+    r.reason_text = fmt::format("reached the target: {} faces (target {})", r.faces_out, target);
+  } else {
+    r.reason_text = fmt::format(
+        "stopped at {} faces{}: of the {} vertices left ({}), {} are corners or complex (kept by rule), {} are "
+        "farther than {:.6g} from their plane or line, {} found no split meeting the aspect ratio {}",
+        r.faces_out, has_target ? fmt::format(" above the target of {}", target) : "", r.vertices_out, classes,
+        c[1] + c[4], r.remaining_above_threshold, max_error, r.remaining_no_triangulation, options.aspect_ratio);
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+}  // namespace lodkit
