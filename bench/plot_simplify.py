@@ -1,7 +1,7 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Charts from lodkit_bench_simplify's CSV: error against face count, and error against time.
 
-    python3 bench/plot_simplify.py docs/benchmarks/schroeder.csv docs/benchmarks/schroeder
+    /usr/bin/python3 bench/plot_simplify.py docs/benchmarks/schroeder.csv docs/benchmarks/schroeder
 
 writes <prefix>_error_vs_faces.{png,svg} and <prefix>_error_vs_time.{png,svg} (matplotlib, from
 Debian's python3-matplotlib). One panel per mesh; log scales since the data spans decades.

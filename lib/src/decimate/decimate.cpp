@@ -326,9 +326,10 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
   const bool has_target = options.target_faces || options.target_ratio;
   const double max_error = options.max_error.value_or(has_target ? diagonal : 0.005 * diagonal);
 
-  // Thresholds that grow to max_error: exact removals first, then geometric steps.
+  // Thresholds that grow to max_error: exact removals first, then steps of sqrt(2), so that within
+  // a pass (which visits vertices in order, not best first) errors stay close to the threshold.
   std::vector<double> thresholds{0.0};
-  for (int k = 12; k >= 0; --k) thresholds.push_back(max_error * std::pow(2.0, -k));
+  for (int k = 32; k >= 0; --k) thresholds.push_back(max_error * std::pow(2.0, -0.5 * k));
 
   Decimator d(mesh, options);
   Star s;
