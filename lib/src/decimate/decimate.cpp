@@ -53,6 +53,15 @@ class Decimator {
     }
     error_.assign(position_.size(), 0.0);
     removed_.assign(position_.size(), 0);
+    // Input normals per point: vertices never move, so a new triangle can be checked against the
+    // surface it replaces even after many removals around it.
+    normal0_.assign(position_.size(), Eigen::Vector3d::Zero());
+    for (const Tri& t : face_) {
+      const Eigen::Vector3d n = (position_[t[1]] - position_[t[0]]).cross(position_[t[2]] - position_[t[0]]);
+      for (Index p : t) normal0_[p] += n;
+    }
+    for (auto& n : normal0_)
+      if (n.norm() > 0) n.normalize();
     cos_feature_ = std::cos(o.feature_angle_deg * std::numbers::pi / 180.0);
   }
 
@@ -166,9 +175,13 @@ class Decimator {
     }
     if (!ok) return false;
     // Every new triangle faces the same way as the star and is not already in the mesh.
+    constexpr double kLimit = -0.17;  // cos(100 deg): a corner may not face away from its input normal
     for (const Tri& t : new_faces_) {
       const Eigen::Vector3d n = (position_[t[1]] - position_[t[0]]).cross(position_[t[2]] - position_[t[0]]);
       if (!(n.dot(s.normal) > 0)) return false;
+      const double len = n.norm();
+      for (Index p : t)
+        if (n.dot(normal0_[p]) < kLimit * len) return false;
       if (face_exists(t)) return false;
     }
     if (static_cast<Index>(new_faces_.size()) != static_cast<Index>(s.faces.size()) - 2 + (s.closed ? 0 : 1))
@@ -283,6 +296,7 @@ class Decimator {
   std::vector<std::vector<Index>> point_faces_;
   std::vector<double> error_;
   std::vector<char> removed_;
+  std::vector<Eigen::Vector3d> normal0_;
   std::vector<Tri> new_faces_;
   Index alive_faces_ = 0;
   double cos_feature_ = 0;
