@@ -116,3 +116,38 @@ TEST(Cli, BadInputCorpusExitsOneNamingTheFileAndWritesNothing) {
 
 }  // namespace
 }  // namespace lodkit
+
+namespace lodkit {
+namespace {
+
+TEST(CliSimplify, EveryMethodEndToEndWithJsonAndMeasure) {
+  test::ScratchDir dir("cli-simplify");
+  ASSERT_EQ(run(dir, "generate torus -o t.ply --tolerance 0.002").status, 0);
+  for (const char* method : {"quadric", "hoppe", "edge-length", "schroeder"}) {
+    const CliRun r = run(dir, std::string("simplify t.ply -o s.obj --ratio 0.2 --measure --json --method ") + method);
+    ASSERT_EQ(r.status, 0) << method << ": " << r.err;
+    EXPECT_NE(r.out.find(std::string("\"method\": \"") + method + "\""), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"hausdorff_percent\""), std::string::npos) << r.out;
+    const Mesh out = read_mesh(dir / "s.obj");
+    EXPECT_LT(out.num_faces(), read_mesh(dir / "t.ply").num_faces() / 4);
+  }
+  const CliRun compared = run(dir, "compare t.ply s.obj");
+  EXPECT_EQ(compared.status, 0);
+  EXPECT_NE(compared.out.find("Hausdorff"), std::string::npos);
+}
+
+TEST(CliSimplify, ReasonIsPrintedWhenTheTargetIsOutOfReach) {
+  test::ScratchDir dir("cli-simplify");
+  ASSERT_EQ(run(dir, "generate box -o b.ply --divisions 4").status, 0);
+  const CliRun r = run(dir, "simplify b.ply -o s.ply --faces 4 --method schroeder");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.err.find("8 corner"), std::string::npos) << r.err;
+  const CliRun q = run(dir, "simplify b.ply -o s.ply --faces 4 --max-error 0.1%");
+  EXPECT_NE(q.err.find("stopped at 12 faces"), std::string::npos) << q.err;
+  EXPECT_NE(q.err.find("error limit"), std::string::npos) << q.err;
+  EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --max-error 1x").status, 1);
+  EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --ratio 2").status, 2);
+}
+
+}  // namespace
+}  // namespace lodkit
