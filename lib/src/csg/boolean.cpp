@@ -1,0 +1,145 @@
+// The one translation unit that compiles CGAL's corefinement (it is the slowest code in the project).
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+#include <lodkit/csg.h>
+#include <lodkit/error.h>
+
+#include <chrono>
+#include <fmt/format.h>
+#include <iterator>
+
+namespace lodkit {
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+template <typename Kernel>
+CGAL::Surface_mesh<typename Kernel::Point_3> to_surface_mesh(const Mesh& m) {
+  CGAL::Surface_mesh<typename Kernel::Point_3> sm;
+  using VI = typename CGAL::Surface_mesh<typename Kernel::Point_3>::Vertex_index;
+  std::vector<VI> v;
+  v.reserve(static_cast<std::size_t>(m.num_vertices()));
+  for (Index i = 0; i < m.num_vertices(); ++i) v.push_back(sm.add_vertex({m.positions(i, 0), m.positions(i, 1), m.positions(i, 2)}));
+  for (Index f = 0; f < m.num_faces(); ++f) sm.add_face(v[m.triangles(f, 0)], v[m.triangles(f, 1)], v[m.triangles(f, 2)]);
+  return sm;
+}
+
+template <typename SM>
+Mesh from_surface_mesh(const SM& sm) {
+  Mesh m;
+  m.positions.resize(static_cast<Index>(sm.number_of_vertices()), 3);
+  std::vector<Index> id(sm.num_vertices(), -1);
+  Index n = 0;
+  for (auto v : sm.vertices()) {
+    const auto& p = sm.point(v);
+    id[v.idx()] = n;
+    m.positions.row(n++) << CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z());
+  }
+  m.triangles.resize(static_cast<Index>(sm.number_of_faces()), 3);
+  Index f = 0;
+  for (auto face : sm.faces()) {
+    int k = 0;
+    for (auto v : CGAL::vertices_around_face(sm.halfedge(face), sm)) {
+      if (k < 3) m.triangles(f, k) = id[v.idx()];
+      ++k;
+    }
+    ++f;
+  }
+  return m;
+}
+
+// Welded copy: corefinement needs shared vertices, and files often repeat positions at seams.
+Mesh welded(const Mesh& m) {
+  Mesh w;
+  w.positions = m.positions;
+  w.triangles = m.triangles;
+  const auto cls = position_classes(w);
+  for (Index f = 0; f < w.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) w.triangles(f, k) = cls[w.triangles(f, k)];
+  remove_unreferenced_vertices(w);
+  return w;
+}
+
+// Checks an operand; turns it outward if it is inside out.
+template <typename SM>
+void check_operand(SM& sm, const Mesh& source, const std::string& name, std::vector<std::string>& warnings) {
+  if (source.num_faces() == 0) throw Error(fmt::format("{}: has no faces", name));
+  if (sm.number_of_faces() != static_cast<std::size_t>(source.num_faces()))
+    throw Error(fmt::format("{}: is not a 2-manifold ({} of {} faces could not be connected)", name,
+                            source.num_faces() - static_cast<Index>(sm.number_of_faces()), source.num_faces()));
+  if (!CGAL::is_closed(sm)) throw Error(fmt::format("{}: is not closed (it has boundary edges)", name));
+  std::vector<std::pair<typename SM::Face_index, typename SM::Face_index>> pairs;
+  PMP::self_intersections(sm, std::back_inserter(pairs));
+  if (!pairs.empty()) throw Error(fmt::format("{}: intersects itself ({} face pairs)", name, pairs.size()));
+  if (!PMP::does_bound_a_volume(sm)) throw Error(fmt::format("{}: does not bound a volume (inconsistent orientation or nested shells)", name));
+  if (!PMP::is_outward_oriented(sm)) {
+    PMP::reverse_face_orientations(sm);
+    warnings.push_back(fmt::format("{}: was inside out; reoriented outward", name));
+  }
+}
+
+template <typename Kernel>
+bool run(const Mesh& a, const Mesh& b, BooleanOp op, const std::string& na, const std::string& nb,
+         Mesh& out, std::vector<std::string>& warnings) {
+  using SM = CGAL::Surface_mesh<typename Kernel::Point_3>;
+  SM ma = to_surface_mesh<Kernel>(a), mb = to_surface_mesh<Kernel>(b), result;
+  check_operand(ma, a, na, warnings);
+  check_operand(mb, b, nb, warnings);
+  bool ok = false;
+  switch (op) {
+    case BooleanOp::Union: ok = PMP::corefine_and_compute_union(ma, mb, result); break;
+    case BooleanOp::Difference: ok = PMP::corefine_and_compute_difference(ma, mb, result); break;
+    case BooleanOp::Intersection: ok = PMP::corefine_and_compute_intersection(ma, mb, result); break;
+  }
+  if (!ok) return false;
+  if (result.number_of_faces() > 0) {
+    // Rounded constructions can leave a result that intersects itself: then it is not valid.
+    if (!CGAL::is_closed(result) || PMP::does_self_intersect(result)) return false;
+  }
+  out = from_surface_mesh(result);
+  return true;
+}
+
+}  // namespace
+
+std::string to_string(BooleanOp op) {
+  switch (op) {
+    case BooleanOp::Union: return "union";
+    case BooleanOp::Difference: return "difference";
+    case BooleanOp::Intersection: return "intersection";
+  }
+  return "?";
+}
+
+BooleanResult boolean(const Mesh& a_in, const Mesh& b_in, BooleanOp op, const BooleanOptions& options,
+                      const std::string& name_a, const std::string& name_b) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(a_in, name_a);
+  validate(b_in, name_b);
+  const Mesh a = welded(a_in), b = welded(b_in);
+  BooleanResult r;
+  bool ok = false;
+  if (!options.exact) ok = run<CGAL::Exact_predicates_inexact_constructions_kernel>(a, b, op, name_a, name_b, r.mesh, r.warnings);
+  if (!ok) {
+    r.warnings.clear();
+    r.used_exact = true;
+    ok = run<CGAL::Exact_predicates_exact_constructions_kernel>(a, b, op, name_a, name_b, r.mesh, r.warnings);
+    // Rounding the exact result to doubles can still, in rare cases, create tiny intersections.
+    if (!ok) throw Error(fmt::format("{} of {} and {}: CGAL could not produce a closed manifold result", to_string(op), name_a, name_b));
+  }
+  double six_volume = 0;
+  for (Index f = 0; f < r.mesh.num_faces(); ++f) {
+    const Eigen::Vector3d p = r.mesh.positions.row(r.mesh.triangles(f, 0)), q = r.mesh.positions.row(r.mesh.triangles(f, 1)),
+                          s = r.mesh.positions.row(r.mesh.triangles(f, 2));
+    six_volume += p.dot(q.cross(s));
+  }
+  r.volume = six_volume / 6.0;
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+}  // namespace lodkit

@@ -1,0 +1,231 @@
+// CSG trees: JSON in, a closed mesh out. Everything but the booleans themselves (boolean.cpp).
+#include <lodkit/csg.h>
+#include <lodkit/error.h>
+#include <lodkit/io.h>
+#include <lodkit/primitives.h>
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <fmt/format.h>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+
+namespace lodkit {
+namespace {
+
+using nlohmann::json;
+
+struct Context {
+  const std::string& name;
+  const std::filesystem::path& base;
+};
+
+[[noreturn]] void fail(const Context& c, const std::string& path, const std::string& what) {
+  throw Error(fmt::format("{}: {}: {}", c.name, path, what));
+}
+
+double number(const Context& c, const json& j, const std::string& path) {
+  if (!j.is_number()) fail(c, path, "expected a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) fail(c, path, "must be finite");
+  return v;
+}
+
+Eigen::Vector3d vec3(const Context& c, const json& j, const std::string& path) {
+  if (!j.is_array() || j.size() != 3) fail(c, path, "expected [x, y, z]");
+  return {number(c, j[0], path + "[0]"), number(c, j[1], path + "[1]"), number(c, j[2], path + "[2]")};
+}
+
+// One transform object: scale, then rotate, then translate (M = T R S), or a whole 4x4 matrix.
+Eigen::Matrix4d transform_of(const Context& c, const json& t, const std::string& path) {
+  if (!t.is_object()) fail(c, path, "a transform is an object with translate, rotate, scale or matrix");
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  if (t.contains("matrix")) {
+    if (t.size() != 1) fail(c, path, "\"matrix\" cannot be combined with other transforms in one object");
+    const json& a = t["matrix"];
+    if (!a.is_array() || a.size() != 16) fail(c, path + ".matrix", "expected 16 numbers, row by row");
+    for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = number(c, a[i], fmt::format("{}.matrix[{}]", path, i));
+    if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) fail(c, path + ".matrix", "last row must be 0 0 0 1");
+    return m;
+  }
+  Eigen::Matrix3d scale = Eigen::Matrix3d::Identity(), rotate = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translate = Eigen::Vector3d::Zero();
+  for (const auto& [key, value] : t.items()) {
+    const std::string p = path + "." + key;
+    if (key == "translate") {
+      translate = vec3(c, value, p);
+    } else if (key == "scale") {
+      Eigen::Vector3d s = value.is_number() ? Eigen::Vector3d::Constant(number(c, value, p)) : vec3(c, value, p);
+      if ((s.array() == 0).any()) fail(c, p, "scale must not be zero");
+      scale = s.asDiagonal();
+    } else if (key == "rotate") {
+      if (!value.is_object()) fail(c, p, "expected {\"axis\": [x, y, z], \"degrees\": d} or {\"euler\": [x, y, z]}");
+      constexpr double deg = std::numbers::pi / 180.0;
+      if (value.contains("euler")) {
+        const Eigen::Vector3d e = vec3(c, value["euler"], p + ".euler") * deg;  // about x, then y, then z
+        rotate = (Eigen::AngleAxisd(e.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(e.y(), Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd(e.x(), Eigen::Vector3d::UnitX())).toRotationMatrix();
+      } else {
+        if (!value.contains("axis") || !value.contains("degrees")) fail(c, p, "needs \"axis\" and \"degrees\" (or \"euler\")");
+        const Eigen::Vector3d axis = vec3(c, value["axis"], p + ".axis");
+        if (!(axis.norm() > 0)) fail(c, p + ".axis", "must not be zero");
+        rotate = Eigen::AngleAxisd(number(c, value["degrees"], p + ".degrees") * deg, axis.normalized()).toRotationMatrix();
+      }
+    } else {
+      fail(c, p, "unknown transform (translate, rotate, scale or matrix)");
+    }
+  }
+  m.topLeftCorner<3, 3>() = rotate * scale;
+  m.topRightCorner<3, 1>() = translate;
+  return m;
+}
+
+CsgNode parse_node(const Context& c, const json& j, const std::string& path) {
+  if (!j.is_object()) fail(c, path, "a node is an object with \"op\", \"primitive\" or \"mesh\"");
+  CsgNode node;
+  node.json_path = path;
+  const int kinds = int(j.contains("op")) + int(j.contains("primitive")) + int(j.contains("mesh"));
+  if (kinds != 1) fail(c, path, "a node needs exactly one of \"op\", \"primitive\" or \"mesh\"");
+  if (j.contains("transform")) {
+    const json& t = j["transform"];
+    if (t.is_array()) {  // applied in order: the first element acts first
+      for (std::size_t i = 0; i < t.size(); ++i)
+        node.transform = transform_of(c, t[i], fmt::format("{}.transform[{}]", path, i)) * node.transform;
+    } else {
+      node.transform = transform_of(c, t, path + ".transform");
+    }
+  }
+  for (const auto& [key, value] : j.items()) {
+    const std::string p = path + "." + key;
+    if (key == "transform") continue;
+    if (key == "op") {
+      node.kind = CsgNode::Kind::Operation;
+      const std::string op = value.is_string() ? value.get<std::string>() : "";
+      if (op == "union") node.op = BooleanOp::Union;
+      else if (op == "difference") node.op = BooleanOp::Difference;
+      else if (op == "intersection") node.op = BooleanOp::Intersection;
+      else fail(c, p, "must be \"union\", \"difference\" or \"intersection\"");
+    } else if (key == "children") {
+      if (!value.is_array() || value.empty()) fail(c, p, "expected a non-empty array of nodes");
+      for (std::size_t i = 0; i < value.size(); ++i) node.children.push_back(parse_node(c, value[i], fmt::format("{}[{}]", p, i)));
+    } else if (key == "primitive") {
+      node.kind = CsgNode::Kind::Primitive;
+      node.primitive = value.is_string() ? value.get<std::string>() : "";
+      static const char* const known[] = {"box", "sphere", "cylinder", "cone", "torus"};
+      if (std::find(std::begin(known), std::end(known), node.primitive) == std::end(known))
+        fail(c, p, "must be box, sphere, cylinder, cone or torus");
+    } else if (key == "mesh") {
+      node.kind = CsgNode::Kind::MeshFile;
+      if (!value.is_string()) fail(c, p, "expected a file path");
+      node.mesh = c.base / value.get<std::string>();
+    } else if (key == "size") {
+      if (value.is_number()) node.size = {number(c, value, p)};
+      else node.size = {vec3(c, value, p).x(), vec3(c, value, p).y(), vec3(c, value, p).z()};
+    } else if (key == "radius" || key == "height" || key == "major_radius" || key == "minor_radius") {
+      node.parameters.push_back({key, number(c, value, p)});
+    } else {
+      fail(c, p, "unknown key");
+    }
+  }
+  if (node.kind == CsgNode::Kind::Operation && node.children.empty()) fail(c, path, "an operation needs \"children\"");
+  if (node.kind != CsgNode::Kind::Operation && !node.children.empty()) fail(c, path + ".children", "only operations have children");
+  return node;
+}
+
+double parameter(const CsgNode& n, const char* key, double fallback) {
+  for (const auto& [k, v] : n.parameters)
+    if (k == key) return v;
+  return fallback;
+}
+
+Mesh transformed(Mesh m, const Eigen::Matrix4d& t) {
+  if (t.isIdentity()) return m;
+  for (Index v = 0; v < m.num_vertices(); ++v)
+    m.positions.row(v) = (t.topLeftCorner<3, 3>() * m.positions.row(v).transpose() + t.topRightCorner<3, 1>()).transpose();
+  if (t.topLeftCorner<3, 3>().determinant() < 0) m.triangles.col(1).swap(m.triangles.col(2));  // mirrored: keep outward
+  return m;
+}
+
+struct Evaluator {
+  const CsgOptions& options;
+  CsgResult& result;
+
+  Mesh leaf(const CsgNode& n) {
+    ++result.primitives;
+    const double t = options.tolerance;
+    try {
+      if (n.kind == CsgNode::Kind::MeshFile) return read_mesh(n.mesh);
+      if (n.primitive == "box") {
+        BoxOptions b;
+        if (n.size.size() == 1) b.size.setConstant(n.size[0]);
+        else if (n.size.size() == 3) b.size = {n.size[0], n.size[1], n.size[2]};
+        return make_box(b);
+      }
+      if (n.primitive == "sphere") return make_uv_sphere({.radius = parameter(n, "radius", 1.0), .tolerance = t});
+      if (n.primitive == "cylinder")
+        return make_cylinder({.radius = parameter(n, "radius", 1.0), .height = parameter(n, "height", 2.0), .tolerance = t});
+      if (n.primitive == "cone")
+        return make_cone({.radius = parameter(n, "radius", 1.0), .height = parameter(n, "height", 2.0), .tolerance = t});
+      return make_torus({.major_radius = parameter(n, "major_radius", 1.0), .minor_radius = parameter(n, "minor_radius", 0.25),
+                         .tolerance = t});
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", n.json_path, e.what()));
+    }
+  }
+
+  Mesh node(const CsgNode& n) {
+    if (n.kind != CsgNode::Kind::Operation) return transformed(leaf(n), n.transform);
+    Mesh acc = node(n.children[0]);
+    for (std::size_t i = 1; i < n.children.size(); ++i) {
+      const Mesh next = node(n.children[i]);
+      ++result.operations;
+      BooleanResult r = boolean(acc, next, n.op, {.exact = options.exact}, n.children[0].json_path + (i > 1 ? " (so far)" : ""),
+                                n.children[i].json_path);
+      for (auto& w : r.warnings) result.warnings.push_back(std::move(w));
+      acc = std::move(r.mesh);
+    }
+    return transformed(std::move(acc), n.transform);
+  }
+};
+
+}  // namespace
+
+CsgNode parse_csg(const std::string& json_text, const std::string& name, const std::filesystem::path& base_dir) {
+  json j;
+  try {
+    j = json::parse(json_text);
+  } catch (const json::parse_error& e) {
+    throw Error(fmt::format("{}: not valid JSON: {}", name, e.what()));
+  }
+  return parse_node({name, base_dir}, j, "$");
+}
+
+CsgNode read_csg(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(fmt::format("{}: cannot open", path.string()));
+  std::stringstream s;
+  s << in.rdbuf();
+  return parse_csg(s.str(), path.string(), path.parent_path());
+}
+
+CsgResult evaluate(const CsgNode& tree, const CsgOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!(options.tolerance > 0)) throw Error(fmt::format("csg: tolerance must be positive, got {}", options.tolerance));
+  CsgResult result;
+  Evaluator e{options, result};
+  result.mesh = e.node(tree);
+  double six_volume = 0;
+  for (Index f = 0; f < result.mesh.num_faces(); ++f) {
+    const Eigen::Vector3d p = result.mesh.positions.row(result.mesh.triangles(f, 0)),
+                          q = result.mesh.positions.row(result.mesh.triangles(f, 1)),
+                          r = result.mesh.positions.row(result.mesh.triangles(f, 2));
+    six_volume += p.dot(q.cross(r));
+  }
+  result.volume = six_volume / 6.0;
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace lodkit
