@@ -3,6 +3,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 #include <lodkit/csg.h>
@@ -97,8 +98,11 @@ bool run(const Mesh& a, const Mesh& b, BooleanOp op, const std::string& na, cons
   }
   if (!ok) return false;
   if (result.number_of_faces() > 0) {
-    // Rounded constructions can leave a result that intersects itself: then it is not valid.
+    // Rounded constructions can leave a result that intersects itself or has flat triangles: then it
+    // is not valid, and the caller retries with exact constructions.
     if (!CGAL::is_closed(result) || PMP::does_self_intersect(result)) return false;
+    for (auto f : result.faces())
+      if (PMP::is_degenerate_triangle_face(f, result)) return false;
   }
   out = from_surface_mesh(result);
   return true;
@@ -128,8 +132,29 @@ BooleanResult boolean(const Mesh& a_in, const Mesh& b_in, BooleanOp op, const Bo
     r.warnings.clear();
     r.used_exact = true;
     ok = run<CGAL::Exact_predicates_exact_constructions_kernel>(a, b, op, name_a, name_b, r.mesh, r.warnings);
-    // Rounding the exact result to doubles can still, in rare cases, create tiny intersections.
-    if (!ok) throw Error(fmt::format("{} of {} and {}: CGAL could not produce a closed manifold result", to_string(op), name_a, name_b));
+    if (!ok) {
+      // Solids that only touch along an edge or at a vertex: their union is not a 2-manifold there.
+      // If their interiors do not overlap, the result is still exact as sets: the union is both
+      // shells side by side, the intersection is empty and the difference is A.
+      Mesh overlap;
+      std::vector<std::string> ignored;
+      const bool touching = op != BooleanOp::Intersection &&
+                            run<CGAL::Exact_predicates_exact_constructions_kernel>(a, b, BooleanOp::Intersection, name_a, name_b,
+                                                                                   overlap, ignored) &&
+                            overlap.num_faces() == 0;
+      if (!touching)
+        throw Error(fmt::format("{} of {} and {}: CGAL could not produce a closed manifold result", to_string(op), name_a, name_b));
+      r.warnings.push_back(fmt::format("{} and {} only touch (along an edge or at a vertex): the {} keeps {} as separate shells",
+                                       name_a, name_b, to_string(op), op == BooleanOp::Union ? "both" : "the first"));
+      r.mesh = a;
+      if (op == BooleanOp::Union) {
+        const Index n = a.num_vertices(), m = a.num_faces();
+        r.mesh.positions.conservativeResize(n + b.num_vertices(), 3);
+        r.mesh.positions.bottomRows(b.num_vertices()) = b.positions;
+        r.mesh.triangles.conservativeResize(m + b.num_faces(), 3);
+        r.mesh.triangles.bottomRows(b.num_faces()) = b.triangles.array() + n;
+      }
+    }
   }
   double six_volume = 0;
   for (Index f = 0; f < r.mesh.num_faces(); ++f) {
