@@ -1,5 +1,6 @@
 // End-to-end: the lodkit binary as a user runs it.
 #include <gtest/gtest.h>
+#include <lodkit/inspect.h>
 #include <lodkit/io.h>
 
 #include <sys/wait.h>
@@ -147,6 +148,37 @@ TEST(CliSimplify, ReasonIsPrintedWhenTheTargetIsOutOfReach) {
   EXPECT_NE(q.err.find("error limit"), std::string::npos) << q.err;
   EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --max-error 1x").status, 1);
   EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --ratio 2").status, 2);
+}
+
+}  // namespace
+}  // namespace lodkit
+
+namespace lodkit {
+namespace {
+
+TEST(CliCsg, BooleansAndTreesEndToEnd) {
+  test::ScratchDir dir("cli-csg");
+  ASSERT_EQ(run(dir, "generate box -o a.ply").status, 0);
+  ASSERT_EQ(run(dir, "generate sphere -o b.ply --radius 0.6 --tolerance 0.01").status, 0);
+  for (const char* op : {"union", "difference", "intersection"}) {
+    const CliRun r = run(dir, std::string("csg ") + op + " a.ply b.ply -o out.ply --json");
+    ASSERT_EQ(r.status, 0) << op << ": " << r.err;
+    EXPECT_NE(r.out.find("\"volume\""), std::string::npos);
+    EXPECT_TRUE(inspect(read_mesh(dir / "out.ply")).closed) << op;
+  }
+  const CliRun tree = run(dir, "csg tree '" LODKIT_SOURCE_DIR "/data/csg/plate_with_holes.json' -o plate.ply --tolerance 0.02");
+  ASSERT_EQ(tree.status, 0) << tree.err;
+  EXPECT_EQ(*inspect(read_mesh(dir / "plate.ply")).genus, 5);
+  // An open operand is refused with the reason, and nothing is written.
+  ASSERT_EQ(run(dir, "generate grid -o open.ply").status, 0);
+  const CliRun bad = run(dir, "csg union open.ply a.ply -o never.ply");
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_NE(bad.err.find("lodkit: error: open.ply: is not closed"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "never.ply"));
+  test::write_text(dir / "bad.json", R"({"op": "union", "children": [{"primitive": "box", "sise": 2}]})");
+  const CliRun badtree = run(dir, "csg tree bad.json -o never.ply");
+  EXPECT_EQ(badtree.status, 1);
+  EXPECT_NE(badtree.err.find("$.children[0].sise: unknown key"), std::string::npos) << badtree.err;
 }
 
 }  // namespace
