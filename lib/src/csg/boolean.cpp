@@ -2,7 +2,9 @@
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
@@ -18,15 +20,31 @@ namespace {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
 
+// Builds the Surface_mesh. Faces whose orientation disagrees with their neighbours' cannot be
+// added as they are; then the mesh goes through CGAL's polygon-soup orientation, with a warning.
 template <typename Kernel>
-CGAL::Surface_mesh<typename Kernel::Point_3> to_surface_mesh(const Mesh& m) {
-  CGAL::Surface_mesh<typename Kernel::Point_3> sm;
-  using VI = typename CGAL::Surface_mesh<typename Kernel::Point_3>::Vertex_index;
-  std::vector<VI> v;
+CGAL::Surface_mesh<typename Kernel::Point_3> to_surface_mesh(const Mesh& m, const std::string& name,
+                                                             std::vector<std::string>& warnings) {
+  using SM = CGAL::Surface_mesh<typename Kernel::Point_3>;
+  SM sm;
+  std::vector<typename SM::Vertex_index> v;
   v.reserve(static_cast<std::size_t>(m.num_vertices()));
   for (Index i = 0; i < m.num_vertices(); ++i) v.push_back(sm.add_vertex({m.positions(i, 0), m.positions(i, 1), m.positions(i, 2)}));
-  for (Index f = 0; f < m.num_faces(); ++f) sm.add_face(v[m.triangles(f, 0)], v[m.triangles(f, 1)], v[m.triangles(f, 2)]);
-  return sm;
+  bool all = true;
+  for (Index f = 0; f < m.num_faces() && all; ++f)
+    all = sm.add_face(v[m.triangles(f, 0)], v[m.triangles(f, 1)], v[m.triangles(f, 2)]) != SM::null_face();
+  if (all) return sm;
+  std::vector<typename Kernel::Point_3> points;
+  std::vector<std::array<std::size_t, 3>> polygons;
+  for (Index i = 0; i < m.num_vertices(); ++i) points.emplace_back(m.positions(i, 0), m.positions(i, 1), m.positions(i, 2));
+  for (Index f = 0; f < m.num_faces(); ++f)
+    polygons.push_back({std::size_t(m.triangles(f, 0)), std::size_t(m.triangles(f, 1)), std::size_t(m.triangles(f, 2))});
+  const bool clean = PMP::orient_polygon_soup(points, polygons);
+  SM oriented;
+  PMP::polygon_soup_to_polygon_mesh(points, polygons, oriented);
+  warnings.push_back(fmt::format("{}: faces were inconsistently oriented; made consistent{}", name,
+                                 clean ? "" : " (some non-manifold vertices were split)"));
+  return oriented;
 }
 
 template <typename SM>
@@ -72,6 +90,7 @@ void check_operand(SM& sm, const Mesh& source, const std::string& name, std::vec
   if (sm.number_of_faces() != static_cast<std::size_t>(source.num_faces()))
     throw Error(fmt::format("{}: is not a 2-manifold ({} of {} faces could not be connected)", name,
                             source.num_faces() - static_cast<Index>(sm.number_of_faces()), source.num_faces()));
+  if (!CGAL::is_valid_polygon_mesh(sm)) throw Error(fmt::format("{}: is not a valid 2-manifold mesh", name));
   if (!CGAL::is_closed(sm)) throw Error(fmt::format("{}: is not closed (it has boundary edges)", name));
   std::vector<std::pair<typename SM::Face_index, typename SM::Face_index>> pairs;
   PMP::self_intersections(sm, std::back_inserter(pairs));
@@ -87,7 +106,7 @@ template <typename Kernel>
 bool run(const Mesh& a, const Mesh& b, BooleanOp op, const std::string& na, const std::string& nb,
          Mesh& out, std::vector<std::string>& warnings) {
   using SM = CGAL::Surface_mesh<typename Kernel::Point_3>;
-  SM ma = to_surface_mesh<Kernel>(a), mb = to_surface_mesh<Kernel>(b), result;
+  SM ma = to_surface_mesh<Kernel>(a, na, warnings), mb = to_surface_mesh<Kernel>(b, nb, warnings), result;
   check_operand(ma, a, na, warnings);
   check_operand(mb, b, nb, warnings);
   bool ok = false;
@@ -143,7 +162,10 @@ BooleanResult boolean(const Mesh& a_in, const Mesh& b_in, BooleanOp op, const Bo
                                                                                    overlap, ignored) &&
                             overlap.num_faces() == 0;
       if (!touching)
-        throw Error(fmt::format("{} of {} and {}: CGAL could not produce a closed manifold result", to_string(op), name_a, name_b));
+        throw Error(fmt::format("{} of {} and {}: the result would not be a closed 2-manifold (the operands touch along "
+                                "edges or at vertices where their interiors also overlap); CGAL refuses it even with exact "
+                                "constructions",
+                                to_string(op), name_a, name_b));
       r.warnings.push_back(fmt::format("{} and {} only touch (along an edge or at a vertex): the {} keeps {} as separate shells",
                                        name_a, name_b, to_string(op), op == BooleanOp::Union ? "both" : "the first"));
       r.mesh = a;
