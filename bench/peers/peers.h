@@ -1,7 +1,10 @@
 #pragma once
 // Adapters that run the peer simplifiers on a lodkit::Mesh. Each runs in its own translation unit so
 // CGAL's heavy templates compile once, apart from everything else.
+#include <lodkit/csg.h>
 #include <lodkit/mesh.h>
+
+#include <vector>
 
 namespace lodkit::bench {
 
@@ -16,5 +19,8 @@ PeerRun run_meshoptimizer(const Mesh& mesh, Index target_faces, bool sloppy);
 PeerRun run_openmesh(const Mesh& mesh, Index target_faces);
 /// CGAL's edge_collapse with Garland-Heckbert plane policies; stops at 1.5 x target edges.
 PeerRun run_cgal(const Mesh& mesh, Index target_faces);
+
+/// Folds `op` over the operands with CGAL's Nef_polyhedron_3 (exact kernel), and converts back.
+Mesh nef_fold(const std::vector<Mesh>& operands, BooleanOp op);
 
 }  // namespace lodkit::bench

@@ -5,6 +5,7 @@
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
@@ -102,6 +103,9 @@ void check_operand(SM& sm, const Mesh& source, const std::string& name, std::vec
   }
 }
 
+template <typename SM>
+bool clean_and_check(SM& sm);
+
 template <typename Kernel>
 bool run(const Mesh& a, const Mesh& b, BooleanOp op, const std::string& na, const std::string& nb,
          Mesh& out, std::vector<std::string>& warnings) {
@@ -116,14 +120,37 @@ bool run(const Mesh& a, const Mesh& b, BooleanOp op, const std::string& na, cons
     case BooleanOp::Intersection: ok = PMP::corefine_and_compute_intersection(ma, mb, result); break;
   }
   if (!ok) return false;
-  if (result.number_of_faces() > 0) {
-    // Rounded constructions can leave a result that intersects itself or has flat triangles: then it
-    // is not valid, and the caller retries with exact constructions.
-    if (!CGAL::is_closed(result) || PMP::does_self_intersect(result)) return false;
-    for (auto f : result.faces())
-      if (PMP::is_degenerate_triangle_face(f, result)) return false;
-  }
+  if (result.number_of_faces() > 0 && !clean_and_check(result)) return false;
   out = from_surface_mesh(result);
+  return true;
+}
+
+// Removes flat triangles (rounded intersection points can fall exactly on a line) and checks that
+// what is left is closed and free of self-intersections.
+template <typename SM>
+bool clean_and_check(SM& sm) {
+  bool flat = false;
+  for (auto f : sm.faces()) flat = flat || PMP::is_degenerate_triangle_face(f, sm);
+  if (flat) {
+    if (!PMP::remove_degenerate_faces(sm)) return false;
+    sm.collect_garbage();
+  }
+  return sm.number_of_faces() > 0 && CGAL::is_closed(sm) && !PMP::does_self_intersect(sm);
+}
+
+// Exact results rounded to doubles: nearby points may merge or cross. Check, repair flat triangles,
+// or refuse.
+bool rounded_result_is_valid(Mesh& m) {
+  if (m.num_faces() == 0) return true;
+  using SM = CGAL::Surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel::Point_3>;
+  const Mesh w = welded(m);
+  SM sm;
+  std::vector<SM::Vertex_index> v;
+  for (Index i = 0; i < w.num_vertices(); ++i) v.push_back(sm.add_vertex({w.positions(i, 0), w.positions(i, 1), w.positions(i, 2)}));
+  for (Index f = 0; f < w.num_faces(); ++f)
+    if (sm.add_face(v[w.triangles(f, 0)], v[w.triangles(f, 1)], v[w.triangles(f, 2)]) == SM::null_face()) return false;
+  if (!clean_and_check(sm)) return false;
+  m = from_surface_mesh(sm);
   return true;
 }
 
@@ -151,6 +178,10 @@ BooleanResult boolean(const Mesh& a_in, const Mesh& b_in, BooleanOp op, const Bo
     r.warnings.clear();
     r.used_exact = true;
     ok = run<CGAL::Exact_predicates_exact_constructions_kernel>(a, b, op, name_a, name_b, r.mesh, r.warnings);
+    if (ok && !rounded_result_is_valid(r.mesh))
+      throw Error(fmt::format("{} of {} and {}: the exact result is valid, but rounding it to double precision makes "
+                              "it touch itself; try a slightly different tolerance or placement",
+                              to_string(op), name_a, name_b));
     if (!ok) {
       // Solids that only touch along an edge or at a vertex: their union is not a 2-manifold there.
       // If their interiors do not overlap, the result is still exact as sets: the union is both

@@ -1,0 +1,109 @@
+// CSG benchmark: lodkit's corefinement booleans against CGAL's Nef_polyhedron_3 on the same inputs.
+// Each run is a child process with a time limit (Nef can take minutes); prints a Markdown table.
+//
+//   lodkit_bench_csg [--limit SECONDS]
+#include <lodkit/csg.h>
+#include <lodkit/inspect.h>
+#include <lodkit/primitives.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <fmt/format.h>
+#include <functional>
+#include <string>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "peers/peers.h"
+
+using namespace lodkit;
+
+namespace {
+
+struct Timed {
+  bool ok = false, timed_out = false;
+  double seconds = 0, peak_mib = 0;
+  long faces = 0;
+  double volume = 0;
+};
+
+Timed run_in_child(const std::function<Mesh()>& work, int limit_seconds) {
+  int fds[2];
+  if (pipe(fds) != 0) std::exit(1);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    alarm(static_cast<unsigned>(limit_seconds));
+    const auto t0 = std::chrono::steady_clock::now();
+    const Mesh m = work();
+    double out[3] = {std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), double(m.num_faces()),
+                     inspect(m).volume.value_or(0.0)};
+    if (write(fds[1], out, sizeof out) != sizeof out) _exit(4);
+    _exit(0);
+  }
+  close(fds[1]);
+  Timed t;
+  double in[3];
+  t.ok = read(fds[0], in, sizeof in) == sizeof in;
+  close(fds[0]);
+  int status = 0;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  t.timed_out = WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM;
+  t.ok = t.ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  t.peak_mib = usage.ru_maxrss / 1024.0;
+  if (t.ok) t.seconds = in[0], t.faces = static_cast<long>(in[1]), t.volume = in[2];
+  return t;
+}
+
+Mesh moved(Mesh m, double x, double y, double z) {
+  m.positions.rowwise() += Eigen::RowVector3d(x, y, z);
+  return m;
+}
+
+// A UV sphere with 2 * segments * (rings - 1) triangles.
+Mesh sphere_with(int segments) { return make_uv_sphere({.radius = 1.0, .segments = segments, .rings = segments / 2 + 1}); }
+
+// 50 primitives: a plate minus a 7 x 7 grid of cylinders.
+std::vector<Mesh> plate_with_49_holes() {
+  std::vector<Mesh> parts{make_box({.size = {8, 8, 0.5}})};
+  for (int i = 0; i < 7; ++i)
+    for (int j = 0; j < 7; ++j)
+      parts.push_back(moved(make_cylinder({.radius = 0.3, .height = 1, .segments = 32}), -3 + i, -3 + j, 0));
+  return parts;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int limit = 600;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--limit" && i + 1 < argc) limit = std::stoi(argv[++i]);
+  fmt::print("| case | method | time s | peak MiB | faces | volume | Nef / lodkit |\n|---|---|---:|---:|---:|---:|---:|\n");
+  auto row = [&](const std::string& name, const std::vector<Mesh>& operands, BooleanOp op) {
+    const Timed lk = run_in_child([&] {
+      Mesh acc = operands[0];
+      for (std::size_t i = 1; i < operands.size(); ++i) acc = boolean(acc, operands[i], op).mesh;
+      return acc;
+    }, limit);
+    const Timed nef = run_in_child([&] { return bench::nef_fold(operands, op); }, limit);
+    auto cell = [&](const Timed& t) {
+      return t.ok ? fmt::format("{:.3f} | {:.0f} | {} | {:.6f}", t.seconds, t.peak_mib, t.faces, t.volume)
+                  : (t.timed_out ? fmt::format("> {} (stopped) | | |", limit) : std::string("failed | | |"));
+    };
+    fmt::print("| {} | lodkit (corefinement) | {} | |\n", name, cell(lk));
+    const std::string ratio = lk.ok && nef.ok ? fmt::format("{:.0f}x", nef.seconds / lk.seconds)
+                              : lk.ok && nef.timed_out ? fmt::format("> {:.0f}x", limit / lk.seconds) : "";
+    fmt::print("| | CGAL Nef_polyhedron_3 | {} | {} |\n", cell(nef), ratio);
+    std::fflush(stdout);
+  };
+  for (int segments : {100, 316}) {  // 9,900 and 99,856 triangles
+    const Mesh a = sphere_with(segments);
+    const Mesh b = moved(sphere_with(segments), 0.7, 0.3, 0.2);
+    row(fmt::format("union of two {}-triangle spheres", a.num_faces()), {a, b}, BooleanOp::Union);
+  }
+  row("plate minus 49 cylinders (50 primitives)", plate_with_49_holes(), BooleanOp::Difference);
+  return 0;
+}
