@@ -4,11 +4,13 @@
 //   lodkit_bench_csg [--limit SECONDS]
 #include <lodkit/csg.h>
 #include <lodkit/inspect.h>
+#include <lodkit/io.h>
 #include <lodkit/primitives.h>
 
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <fmt/format.h>
 #include <functional>
 #include <string>
@@ -82,11 +84,23 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
     if (std::string(argv[i]) == "--limit" && i + 1 < argc) limit = std::stoi(argv[++i]);
   fmt::print("| case | method | time s | peak MiB | faces | volume | Nef / lodkit |\n|---|---|---:|---:|---:|---:|---:|\n");
-  auto row = [&](const std::string& name, const std::vector<Mesh>& operands, BooleanOp op) {
+  auto row = [&](const std::string& name, const std::vector<Mesh>& operands, BooleanOp op, const CsgNode* as_tree = nullptr) {
     const Timed lk = run_in_child([&] {
-      Mesh acc = operands[0];
-      for (std::size_t i = 1; i < operands.size(); ++i) acc = boolean(acc, operands[i], op).mesh;
-      return acc;
+      if (as_tree) return evaluate(*as_tree, {.tolerance = circle_chordal_error(0.3, 32)}).mesh;
+      // The same operands as a tree: lodkit's evaluator (checks once, reduces pairwise).
+      CsgNode tree;
+      tree.kind = CsgNode::Kind::Operation;
+      tree.op = op;
+      for (std::size_t i = 0; i < operands.size(); ++i) {
+        CsgNode leaf;
+        leaf.kind = CsgNode::Kind::MeshFile;
+        leaf.mesh = fmt::format("/tmp/lodkit-bench-csg-{}-{}.ply", getpid(), i);
+        write_mesh(operands[i], leaf.mesh);
+        tree.children.push_back(leaf);
+      }
+      Mesh m = evaluate(tree).mesh;
+      for (const CsgNode& leaf : tree.children) std::filesystem::remove(leaf.mesh);
+      return m;
     }, limit);
     const Timed nef = run_in_child([&] { return bench::nef_fold(operands, op); }, limit);
     auto cell = [&](const Timed& t) {
@@ -104,6 +118,23 @@ int main(int argc, char** argv) {
     const Mesh b = moved(sphere_with(segments), 0.7, 0.3, 0.2);
     row(fmt::format("union of two {}-triangle spheres", a.num_faces()), {a, b}, BooleanOp::Union);
   }
-  row("plate minus 49 cylinders (50 primitives)", plate_with_49_holes(), BooleanOp::Difference);
+  // The same plate as a CSG tree of 50 primitives (the cylinders tessellated to the same 32 segments).
+  CsgNode plate;
+  plate.kind = CsgNode::Kind::Operation;
+  plate.op = BooleanOp::Difference;
+  CsgNode box;
+  box.primitive = "box";
+  box.size = {8, 8, 0.5};
+  plate.children.push_back(box);
+  for (int i = 0; i < 7; ++i)
+    for (int j = 0; j < 7; ++j) {
+      CsgNode c;
+      c.primitive = "cylinder";
+      c.parameters = {{"radius", 0.3}, {"height", 1.0}};
+      c.transform.topRightCorner<3, 1>() = Eigen::Vector3d(-3 + i, -3 + j, 0);
+      plate.children.push_back(c);
+    }
+  row("plate minus 49 cylinders: 50-primitive tree", plate_with_49_holes(), BooleanOp::Difference, &plate);
+  row("plate minus 49 cylinders: 50 mesh files", plate_with_49_holes(), BooleanOp::Difference);
   return 0;
 }

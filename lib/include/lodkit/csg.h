@@ -19,6 +19,9 @@ enum class BooleanOp { Union, Difference, Intersection };
 
 struct BooleanOptions {
   bool exact = false;  ///< use exact constructions from the start
+  /// Check the operands (closed, no self-intersections, bounds a volume). Results of boolean() pass
+  /// these checks by construction, so chains of operations may skip them.
+  bool check_operands = true;
 };
 
 struct BooleanResult {
@@ -33,6 +36,10 @@ struct BooleanResult {
 /// \throw Error naming the input and its defect (open, self-intersecting with N face pairs, not a volume).
 BooleanResult boolean(const Mesh& a, const Mesh& b, BooleanOp op, const BooleanOptions& options = {},
                       const std::string& name_a = "A", const std::string& name_b = "B");
+
+/// The operand checks of boolean() on their own.
+/// \throw Error naming the mesh and its defect.
+void check_solid(const Mesh& mesh, const std::string& name);
 
 /// A node of a CSG tree: an operation over children, a primitive, or a mesh file; each may carry a
 /// transform (applied to the node's result).

@@ -108,11 +108,13 @@ bool clean_and_check(SM& sm);
 
 template <typename Kernel>
 bool run(const Mesh& a, const Mesh& b, BooleanOp op, const std::string& na, const std::string& nb,
-         Mesh& out, std::vector<std::string>& warnings) {
+         Mesh& out, std::vector<std::string>& warnings, bool check = true) {
   using SM = CGAL::Surface_mesh<typename Kernel::Point_3>;
   SM ma = to_surface_mesh<Kernel>(a, na, warnings), mb = to_surface_mesh<Kernel>(b, nb, warnings), result;
-  check_operand(ma, a, na, warnings);
-  check_operand(mb, b, nb, warnings);
+  if (check) {
+    check_operand(ma, a, na, warnings);
+    check_operand(mb, b, nb, warnings);
+  }
   bool ok = false;
   switch (op) {
     case BooleanOp::Union: ok = PMP::corefine_and_compute_union(ma, mb, result); break;
@@ -156,6 +158,14 @@ bool rounded_result_is_valid(Mesh& m) {
 
 }  // namespace
 
+void check_solid(const Mesh& mesh, const std::string& name) {
+  validate(mesh, name);
+  std::vector<std::string> warnings;
+  const Mesh w = welded(mesh);
+  auto sm = to_surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel>(w, name, warnings);
+  check_operand(sm, w, name, warnings);
+}
+
 std::string to_string(BooleanOp op) {
   switch (op) {
     case BooleanOp::Union: return "union";
@@ -173,11 +183,29 @@ BooleanResult boolean(const Mesh& a_in, const Mesh& b_in, BooleanOp op, const Bo
   const Mesh a = welded(a_in), b = welded(b_in);
   BooleanResult r;
   bool ok = false;
-  if (!options.exact) ok = run<CGAL::Exact_predicates_inexact_constructions_kernel>(a, b, op, name_a, name_b, r.mesh, r.warnings);
+  const bool check = options.check_operands;
+  const Eigen::AlignedBox3d box_a = bounding_box(a), box_b = bounding_box(b);
+  if (!box_a.isEmpty() && !box_b.isEmpty() && !box_a.intersects(box_b)) {
+    // Boxes apart (not even touching): nothing to corefine. The union is both shells, the
+    // intersection empty, the difference A.
+    if (check) check_solid(a, name_a), check_solid(b, name_b);
+    r.mesh = a;
+    if (op == BooleanOp::Intersection) r.mesh = Mesh{};
+    if (op == BooleanOp::Union) {
+      const Index n = a.num_vertices(), m = a.num_faces();
+      r.mesh.positions.conservativeResize(n + b.num_vertices(), 3);
+      r.mesh.positions.bottomRows(b.num_vertices()) = b.positions;
+      r.mesh.triangles.conservativeResize(m + b.num_faces(), 3);
+      r.mesh.triangles.bottomRows(b.num_faces()) = b.triangles.array() + n;
+    }
+    ok = true;
+  }
+  if (!ok && !options.exact)
+    ok = run<CGAL::Exact_predicates_inexact_constructions_kernel>(a, b, op, name_a, name_b, r.mesh, r.warnings, check);
   if (!ok) {
     r.warnings.clear();
     r.used_exact = true;
-    ok = run<CGAL::Exact_predicates_exact_constructions_kernel>(a, b, op, name_a, name_b, r.mesh, r.warnings);
+    ok = run<CGAL::Exact_predicates_exact_constructions_kernel>(a, b, op, name_a, name_b, r.mesh, r.warnings, check);
     if (ok && !rounded_result_is_valid(r.mesh))
       throw Error(fmt::format("{} of {} and {}: the exact result is valid, but rounding it to double precision makes "
                               "it touch itself; try a slightly different tolerance or placement",

@@ -156,7 +156,12 @@ struct Evaluator {
     ++result.primitives;
     const double t = options.tolerance;
     try {
-      if (n.kind == CsgNode::Kind::MeshFile) return read_mesh(n.mesh);
+      if (n.kind == CsgNode::Kind::MeshFile) {
+        // Checked once here; every boolean after this works on solids it made itself.
+        Mesh m = read_mesh(n.mesh);
+        check_solid(m, n.mesh.string());
+        return m;
+      }
       if (n.primitive == "box") {
         BoxOptions b;
         if (n.size.size() == 1) b.size.setConstant(n.size[0]);
@@ -175,18 +180,40 @@ struct Evaluator {
     }
   }
 
+  Mesh combine(const Mesh& a, const Mesh& b, BooleanOp op, const std::string& na, const std::string& nb) {
+    ++result.operations;
+    BooleanResult r = boolean(a, b, op, {.exact = options.exact, .check_operands = false}, na, nb);
+    for (auto& w : r.warnings) result.warnings.push_back(std::move(w));
+    return std::move(r.mesh);
+  }
+
+  // Pairwise (balanced) reduction: each operand takes part in log2(n) operations, not up to n, so a
+  // union of many parts never corefines one ever-growing mesh against each small one.
+  Mesh reduce(std::vector<Mesh> parts, BooleanOp op, const std::string& where) {
+    while (parts.size() > 1) {
+      std::vector<Mesh> next;
+      for (std::size_t i = 0; i + 1 < parts.size(); i += 2) next.push_back(combine(parts[i], parts[i + 1], op, where, where));
+      if (parts.size() % 2) next.push_back(std::move(parts.back()));
+      parts = std::move(next);
+    }
+    return std::move(parts.front());
+  }
+
   Mesh node(const CsgNode& n) {
     if (n.kind != CsgNode::Kind::Operation) return transformed(leaf(n), n.transform);
-    Mesh acc = node(n.children[0]);
-    for (std::size_t i = 1; i < n.children.size(); ++i) {
-      const Mesh next = node(n.children[i]);
-      ++result.operations;
-      BooleanResult r = boolean(acc, next, n.op, {.exact = options.exact}, n.children[0].json_path + (i > 1 ? " (so far)" : ""),
-                                n.children[i].json_path);
-      for (auto& w : r.warnings) result.warnings.push_back(std::move(w));
-      acc = std::move(r.mesh);
+    std::vector<Mesh> parts;
+    for (const CsgNode& child : n.children) parts.push_back(node(child));
+    Mesh out;
+    if (n.op == BooleanOp::Difference && parts.size() > 1) {
+      // A - B - C - ... = A - (B u C u ...)
+      Mesh first = std::move(parts.front());
+      parts.erase(parts.begin());
+      const Mesh cut = reduce(std::move(parts), BooleanOp::Union, n.json_path + ".children[1..]");
+      out = combine(first, cut, BooleanOp::Difference, n.children[0].json_path, n.json_path + ".children[1..]");
+    } else {
+      out = reduce(std::move(parts), n.op, n.json_path + ".children");
     }
-    return transformed(std::move(acc), n.transform);
+    return transformed(std::move(out), n.transform);
   }
 };
 
