@@ -25,7 +25,6 @@
 #include <unistd.h>
 #include <vector>
 
-#include "metrics/aabb_tree.h"
 #include "peers/peers.h"
 
 namespace fs = std::filesystem;
@@ -83,20 +82,6 @@ Outcome run_in_child(const std::string& method, const fs::path& input, Index tar
   return o;
 }
 
-Index flipped_faces(const Mesh& input, const detail::AabbTree& tree, const Mesh& output) {
-  Index flipped = 0;
-  for (Index f = 0; f < output.num_faces(); ++f) {
-    const Eigen::Vector3d a = output.positions.row(output.triangles(f, 0)), b = output.positions.row(output.triangles(f, 1)),
-                          c = output.positions.row(output.triangles(f, 2));
-    const auto hit = tree.closest((a + b + c) / 3.0);
-    const Eigen::Vector3d p = input.positions.row(input.triangles(hit.face, 0)),
-                          q = input.positions.row(input.triangles(hit.face, 1)),
-                          r = input.positions.row(input.triangles(hit.face, 2));
-    if ((b - a).cross(c - a).dot((q - p).cross(r - p)) < 0) ++flipped;
-  }
-  return flipped;
-}
-
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream ss(s);
@@ -141,7 +126,6 @@ int main(int argc, char** argv) {
     remove_unreferenced_vertices(mesh);
     const fs::path prepared = work / "input.ply";
     write_mesh(mesh, prepared);
-    const detail::AabbTree tree(mesh);
     const std::string name = fs::path(path).filename().string();
     for (double ratio : targets) {
       const auto target = static_cast<Index>(std::llround(ratio * mesh.num_faces()));
@@ -157,7 +141,7 @@ int main(int argc, char** argv) {
         }
         const Comparison c = compare(mesh, o.mesh);
         const MeshReport r = inspect(o.mesh);
-        const Index flipped = flipped_faces(mesh, tree, o.mesh);
+        const Index flipped = count_flipped_faces(mesh, o.mesh);
         const double normal_dev = 0.5 * (c.a_to_b.normal_deviation_mean_deg + c.b_to_a.normal_deviation_mean_deg);
         fmt::print("| {} | {} | {:.3f} | {:.0f} | {} | {:.4f} | {:.5f} | {} | {} |\n", label, method, o.seconds, o.peak_mib,
                    o.mesh.num_faces(), c.percent(c.hausdorff), c.percent(c.rms), r.non_manifold_edges, flipped);

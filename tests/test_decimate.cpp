@@ -63,14 +63,6 @@ TEST(Decimate, FineCubeKeepsItsCornersAndFeatureEdgesExactly) {
   EXPECT_EQ(count_vertex_classes(r.mesh)[kCorner], 8);
 }
 
-Mesh bumpy_sphere(int subdivisions, double amplitude) {
-  Mesh m = make_icosphere({.subdivisions = subdivisions});
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> noise(-amplitude, amplitude);
-  for (Index v = 0; v < m.num_vertices(); ++v) m.positions.row(v) *= 1.0 + noise(rng);
-  return m;
-}
-
 // An open mesh: the upper half of a UV sphere (one circular boundary).
 Mesh dome() {
   const Mesh s = make_uv_sphere({.segments = 48, .rings = 24});
@@ -88,7 +80,7 @@ Mesh dome() {
 
 TEST(Decimate, OutputsStayManifoldUnflippedWithTheSameEulerCharacteristic) {
   const std::vector<std::pair<std::string, Mesh>> family{
-      {"bumpy_sphere", bumpy_sphere(4, 0.01)},
+      {"bumpy_sphere", test::bumpy_sphere(4, 0.01, 11)},
       {"torus", make_torus({.major_segments = 64, .minor_segments = 24})},
       {"dome", dome()},
       {"cylinder", make_cylinder({.segments = 48, .stacks = 10})}};
@@ -110,7 +102,7 @@ TEST(Decimate, OutputsStayManifoldUnflippedWithTheSameEulerCharacteristic) {
       if (after.volume) {
         EXPECT_GT(*after.volume, 0.0);
       }
-      EXPECT_EQ(test::flipped_faces(mesh, r.mesh), 0);
+      EXPECT_EQ(count_flipped_faces(mesh, r.mesh), 0);
     }
   }
 }
@@ -152,7 +144,7 @@ TEST(Decimate, ReportsWhyItStops) {
 }
 
 TEST(Decimate, HitsReachableTargetsAndRejectsBadOptions) {
-  const Mesh m = bumpy_sphere(4, 0.005);
+  const Mesh m = test::bumpy_sphere(4, 0.005, 11);
   const DecimateResult r = decimate(m, {.target_faces = 1001});
   EXPECT_TRUE(r.target_reached) << r.reason_text;
   EXPECT_EQ(r.faces_out, 1000);  // closed: even face counts only, one below an odd target

@@ -13,22 +13,13 @@
 namespace lodkit {
 namespace {
 
-// A bumpy closed surface: an icosphere with deterministic radial noise.
-Mesh bumpy_sphere(int subdivisions, double amplitude) {
-  Mesh m = make_icosphere({.subdivisions = subdivisions});
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> noise(-amplitude, amplitude);
-  for (Index v = 0; v < m.num_vertices(); ++v) m.positions.row(v) *= 1.0 + noise(rng);
-  return m;
-}
-
 struct Case {
   std::string name;
   Mesh mesh;
 };
 
 std::vector<Case> families() {
-  return {{"bumpy_sphere", bumpy_sphere(4, 0.02)},
+  return {{"bumpy_sphere", test::bumpy_sphere(4, 0.02)},
           {"torus", make_torus({.major_segments = 96, .minor_segments = 32})},
           {"uv_sphere_with_seams", make_uv_sphere({.segments = 48, .rings = 24, .uvs = true})},
           {"grid_with_boundary", make_grid({.divisions_x = 30, .divisions_y = 20})},
@@ -56,7 +47,7 @@ TEST_P(EveryMethod, KeepsTopologyAndOrientationAndHitsTheTarget) {
       EXPECT_EQ(after.components, before.components);
       EXPECT_EQ(after.closed, before.closed);
       EXPECT_EQ(after.degenerate_faces, 0);
-      EXPECT_EQ(test::flipped_faces(c.mesh, r.mesh), 0);
+      EXPECT_EQ(count_flipped_faces(c.mesh, r.mesh), 0);
       const Index target = static_cast<Index>(std::llround(ratio * c.mesh.num_faces()));
       if (r.reason == StopReason::TargetReached) {
         EXPECT_LE(r.faces_out, target);
@@ -156,7 +147,7 @@ TEST(Simplify, LockedBoundaryStaysPutAndTheReasonIsGiven) {
 }
 
 TEST(Simplify, ErrorLimitStopsEarly) {
-  const Mesh m = bumpy_sphere(4, 0.02);
+  const Mesh m = test::bumpy_sphere(4, 0.02);
   SimplifyOptions o;
   o.target_faces = 20;
   o.max_error = 0.002;
@@ -170,7 +161,7 @@ TEST(Simplify, DirtyInputSimplifiesWithoutCrashing) {
   // A bumpy sphere plus: a fin (a triangle hanging on one of its edges: a non-manifold edge), a bow tie
   // touching a vertex, duplicate vertices (a second unwelded copy of some faces' corners), and
   // unreferenced vertices.
-  Mesh m = bumpy_sphere(3, 0.01);
+  Mesh m = test::bumpy_sphere(3, 0.01);
   const Index nv = m.num_vertices(), nf = m.num_faces();
   m.positions.conservativeResize(nv + 6, 3);
   m.positions.row(nv) << 0, 0, 3;          // fin apex on edge (t0, t1) of face 0
@@ -197,7 +188,7 @@ TEST(Simplify, DirtyInputSimplifiesWithoutCrashing) {
 }
 
 TEST(Simplify, RecordsEveryCollapse) {
-  const Mesh m = bumpy_sphere(3, 0.01);
+  const Mesh m = test::bumpy_sphere(3, 0.01);
   SimplifyOptions o;
   o.target_ratio = 0.25;
   o.record_collapses = true;
@@ -228,7 +219,7 @@ TEST(Simplify, BadOptionsAreErrors) {
 }
 
 TEST(Simplify, IsDeterministic) {
-  const Mesh m = bumpy_sphere(4, 0.02);
+  const Mesh m = test::bumpy_sphere(4, 0.02);
   SimplifyOptions o;
   o.target_ratio = 0.05;
   EXPECT_EQ(simplify(m, o).mesh.positions, simplify(m, o).mesh.positions);
@@ -268,7 +259,7 @@ TEST(SimplifyAttributes, WeightedColoursStayInRangeAndTheBorderStaysSharp) {
   // A bumpy sphere painted half red, half blue. With colour weights the merged wedges take optimised
   // colours: they must stay valid colours, and the red/blue border must stay a thin line of mixed
   // vertices rather than a smear.
-  Mesh m = bumpy_sphere(4, 0.005);
+  Mesh m = test::bumpy_sphere(4, 0.005);
   m.attributes.colours.resize(m.num_vertices(), 4);
   for (Index v = 0; v < m.num_vertices(); ++v)
     m.attributes.colours.row(v) = m.positions(v, 2) > 0 ? Eigen::RowVector4f(1, 0, 0, 1) : Eigen::RowVector4f(0, 0, 1, 1);

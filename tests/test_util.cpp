@@ -1,6 +1,6 @@
 #include "test_util.h"
 
-#include "metrics/aabb_tree.h"
+#include <lodkit/primitives.h>
 
 #include <fstream>
 #include <random>
@@ -55,20 +55,12 @@ Mesh single_triangle() {
   return m;
 }
 
-Index flipped_faces(const Mesh& input, const Mesh& output) {
-  const detail::AabbTree tree(input);
-  Index flipped = 0;
-  for (Index f = 0; f < output.num_faces(); ++f) {
-    const Eigen::Vector3d a = output.positions.row(output.triangles(f, 0)),
-                          b = output.positions.row(output.triangles(f, 1)),
-                          c = output.positions.row(output.triangles(f, 2));
-    const auto hit = tree.closest((a + b + c) / 3.0);
-    const Eigen::Vector3d p = input.positions.row(input.triangles(hit.face, 0)),
-                          q = input.positions.row(input.triangles(hit.face, 1)),
-                          r = input.positions.row(input.triangles(hit.face, 2));
-    if ((b - a).cross(c - a).dot((q - p).cross(r - p)) < 0) ++flipped;
-  }
-  return flipped;
+Mesh bumpy_sphere(int subdivisions, double amplitude, unsigned seed) {
+  Mesh m = make_icosphere({.subdivisions = subdivisions});
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> noise(-amplitude, amplitude);
+  for (Index v = 0; v < m.num_vertices(); ++v) m.positions.row(v) *= 1.0 + noise(rng);
+  return m;
 }
 
 }  // namespace lodkit::test

@@ -29,8 +29,7 @@ Mesh tetrahedron();
 /// One triangle.
 Mesh single_triangle();
 
-/// Faces of `output` whose normal points against the normal of the nearest face of `input` (the
-/// "flipped" count of the benchmarks).
-Index flipped_faces(const Mesh& input, const Mesh& output);
+/// An icosphere with deterministic radial noise of +-amplitude (relative): a bumpy closed surface.
+Mesh bumpy_sphere(int subdivisions, double amplitude, unsigned seed = 7);
 
 }  // namespace lodkit::test

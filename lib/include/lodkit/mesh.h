@@ -61,6 +61,13 @@ Index remove_unreferenced_vertices(Mesh& mesh);
 /// use to weld seams for topology while keeping the seam vertices themselves.
 Eigen::VectorX<Index> position_classes(const Mesh& mesh);
 
+/// Signed enclosed volume (divergence theorem, about the bounding-box centre for precision). Meaningful
+/// for closed, consistently oriented meshes; negative when faces point inward.
+double signed_volume(const Mesh& mesh);
+
+/// Both meshes in one: b's vertices and faces appended after a's (attributes dropped).
+Mesh concatenated(const Mesh& a, const Mesh& b);
+
 /// Area-weighted vertex normals (unit length; zero only for isolated vertices).
 Normals compute_vertex_normals(const Mesh& mesh);
 

@@ -46,4 +46,8 @@ struct Comparison {
 /// \throw Error if either mesh has no faces.
 Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options = {});
 
+/// Faces of `mesh` whose normal points against the normal of the face of `reference` nearest to
+/// their centroid: the "flipped faces" of simplification benchmarks.
+Index count_flipped_faces(const Mesh& reference, const Mesh& mesh);
+
 }  // namespace lodkit

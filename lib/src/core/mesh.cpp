@@ -145,6 +145,29 @@ Index remove_unreferenced_vertices(Mesh& mesh) {
   return n - next;
 }
 
+double signed_volume(const Mesh& mesh) {
+  const Eigen::AlignedBox3d box = bounding_box(mesh);
+  const Eigen::Vector3d o = box.isEmpty() ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(box.center());
+  double six_volume = 0.0;
+  for (Index f = 0; f < mesh.num_faces(); ++f) {
+    const Eigen::Vector3d a = mesh.positions.row(mesh.triangles(f, 0)).transpose() - o,
+                          b = mesh.positions.row(mesh.triangles(f, 1)).transpose() - o,
+                          c = mesh.positions.row(mesh.triangles(f, 2)).transpose() - o;
+    six_volume += a.dot(b.cross(c));
+  }
+  return six_volume / 6.0;
+}
+
+Mesh concatenated(const Mesh& a, const Mesh& b) {
+  Mesh m;
+  m.positions.resize(a.num_vertices() + b.num_vertices(), 3);
+  m.positions << a.positions, b.positions;
+  m.triangles.resize(a.num_faces() + b.num_faces(), 3);
+  m.triangles.topRows(a.num_faces()) = a.triangles;
+  m.triangles.bottomRows(b.num_faces()) = b.triangles.array() + a.num_vertices();
+  return m;
+}
+
 Normals compute_vertex_normals(const Mesh& mesh) {
   Normals normals = Normals::Zero(mesh.num_vertices(), 3);
   for (Index f = 0; f < mesh.num_faces(); ++f) {

@@ -189,15 +189,7 @@ BooleanResult boolean(const Mesh& a_in, const Mesh& b_in, BooleanOp op, const Bo
     // Boxes apart (not even touching): nothing to corefine. The union is both shells, the
     // intersection empty, the difference A.
     if (check) check_solid(a, name_a), check_solid(b, name_b);
-    r.mesh = a;
-    if (op == BooleanOp::Intersection) r.mesh = Mesh{};
-    if (op == BooleanOp::Union) {
-      const Index n = a.num_vertices(), m = a.num_faces();
-      r.mesh.positions.conservativeResize(n + b.num_vertices(), 3);
-      r.mesh.positions.bottomRows(b.num_vertices()) = b.positions;
-      r.mesh.triangles.conservativeResize(m + b.num_faces(), 3);
-      r.mesh.triangles.bottomRows(b.num_faces()) = b.triangles.array() + n;
-    }
+    r.mesh = op == BooleanOp::Union ? concatenated(a, b) : op == BooleanOp::Intersection ? Mesh{} : a;
     ok = true;
   }
   if (!ok && !options.exact)
@@ -227,23 +219,10 @@ BooleanResult boolean(const Mesh& a_in, const Mesh& b_in, BooleanOp op, const Bo
                                 to_string(op), name_a, name_b));
       r.warnings.push_back(fmt::format("{} and {} only touch (along an edge or at a vertex): the {} keeps {} as separate shells",
                                        name_a, name_b, to_string(op), op == BooleanOp::Union ? "both" : "the first"));
-      r.mesh = a;
-      if (op == BooleanOp::Union) {
-        const Index n = a.num_vertices(), m = a.num_faces();
-        r.mesh.positions.conservativeResize(n + b.num_vertices(), 3);
-        r.mesh.positions.bottomRows(b.num_vertices()) = b.positions;
-        r.mesh.triangles.conservativeResize(m + b.num_faces(), 3);
-        r.mesh.triangles.bottomRows(b.num_faces()) = b.triangles.array() + n;
-      }
+      r.mesh = op == BooleanOp::Union ? concatenated(a, b) : a;
     }
   }
-  double six_volume = 0;
-  for (Index f = 0; f < r.mesh.num_faces(); ++f) {
-    const Eigen::Vector3d p = r.mesh.positions.row(r.mesh.triangles(f, 0)), q = r.mesh.positions.row(r.mesh.triangles(f, 1)),
-                          s = r.mesh.positions.row(r.mesh.triangles(f, 2));
-    six_volume += p.dot(q.cross(s));
-  }
-  r.volume = six_volume / 6.0;
+  r.volume = signed_volume(r.mesh);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }

@@ -243,14 +243,7 @@ CsgResult evaluate(const CsgNode& tree, const CsgOptions& options) {
   CsgResult result;
   Evaluator e{options, result};
   result.mesh = e.node(tree);
-  double six_volume = 0;
-  for (Index f = 0; f < result.mesh.num_faces(); ++f) {
-    const Eigen::Vector3d p = result.mesh.positions.row(result.mesh.triangles(f, 0)),
-                          q = result.mesh.positions.row(result.mesh.triangles(f, 1)),
-                          r = result.mesh.positions.row(result.mesh.triangles(f, 2));
-    six_volume += p.dot(q.cross(r));
-  }
-  result.volume = six_volume / 6.0;
+  result.volume = signed_volume(result.mesh);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }

@@ -101,20 +101,7 @@ MeshReport inspect(const Mesh& mesh) {
     const long long twice_genus = 2LL * r.components - r.euler_characteristic - r.boundary_loops;
     if (twice_genus >= 0 && twice_genus % 2 == 0) r.genus = twice_genus / 2;
   }
-  if (r.closed && r.oriented) {
-    // Tetrahedra from the box centre, not the origin: exact for closed meshes and free of the
-    // cancellation that far-from-origin coordinates would cause.
-    const Eigen::Vector3d o = r.bounds.center();
-    double six_volume = 0.0;
-    for (Index f = 0; f < r.faces; ++f) {
-      const auto t = mesh.triangles.row(f);
-      const Eigen::Vector3d a = mesh.positions.row(t[0]).transpose() - o,
-                            b = mesh.positions.row(t[1]).transpose() - o,
-                            c = mesh.positions.row(t[2]).transpose() - o;
-      six_volume += a.dot(b.cross(c));
-    }
-    r.volume = six_volume / 6.0;
-  }
+  if (r.closed && r.oriented) r.volume = signed_volume(mesh);
   return r;
 }
 
