@@ -41,6 +41,10 @@ BooleanResult boolean(const Mesh& a, const Mesh& b, BooleanOp op, const BooleanO
 /// \throw Error naming the mesh and its defect.
 void check_solid(const Mesh& mesh, const std::string& name);
 
+/// True when `mesh` is a set of closed shells that neither intersect nor nest: then it is already the
+/// union of its shells (a quick test before uniting many separate parts).
+bool are_separate_solids(const Mesh& mesh);
+
 /// A node of a CSG tree: an operation over children, a primitive, or a mesh file; each may carry a
 /// transform (applied to the node's result).
 struct CsgNode {

@@ -166,6 +166,15 @@ void check_solid(const Mesh& mesh, const std::string& name) {
   check_operand(sm, w, name, warnings);
 }
 
+bool are_separate_solids(const Mesh& mesh) {
+  using SM = CGAL::Surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel::Point_3>;
+  std::vector<std::string> warnings;
+  const Mesh w = welded(mesh);
+  SM sm = to_surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel>(w, "parts", warnings);
+  return warnings.empty() && sm.number_of_faces() == static_cast<std::size_t>(w.num_faces()) && CGAL::is_closed(sm) &&
+         !PMP::does_self_intersect(sm) && PMP::does_bound_a_volume(sm) && PMP::is_outward_oriented(sm);
+}
+
 std::string to_string(BooleanOp op) {
   switch (op) {
     case BooleanOp::Union: return "union";

@@ -190,6 +190,13 @@ struct Evaluator {
   // Pairwise (balanced) reduction: each operand takes part in log2(n) operations, not up to n, so a
   // union of many parts never corefines one ever-growing mesh against each small one.
   Mesh reduce(std::vector<Mesh> parts, BooleanOp op, const std::string& where) {
+    if (op == BooleanOp::Union && parts.size() > 2) {
+      // Many separate parts (holes to drill, say): their union is just all their shells, once one
+      // test shows that none touches or contains another.
+      Mesh all = parts[0];
+      for (std::size_t i = 1; i < parts.size(); ++i) all = concatenated(all, parts[i]);
+      if (are_separate_solids(all)) return all;
+    }
     while (parts.size() > 1) {
       std::vector<Mesh> next;
       for (std::size_t i = 0; i + 1 < parts.size(); i += 2) next.push_back(combine(parts[i], parts[i + 1], op, where, where));
