@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace lodkit {
 
@@ -53,6 +54,10 @@ Eigen::AlignedBox3d bounding_box(const Mesh& mesh);
 /// Merges vertices with bit-identical positions *and* identical attributes (exact welding; seams
 /// survive). Unreferenced vertices are kept. Returns the number of vertices removed.
 Index weld_identical_vertices(Mesh& mesh);
+
+/// For each vertex, the lowest-index vertex with a bit-identical position and identical attributes
+/// (itself if none): the classes weld_identical_vertices() merges.
+std::vector<Index> identical_vertex_classes(const Mesh& mesh);
 
 /// Removes vertices that no face references, keeping the order of the rest. Returns how many.
 Index remove_unreferenced_vertices(Mesh& mesh);

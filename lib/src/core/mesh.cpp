@@ -93,7 +93,7 @@ void remap_vertices(Mesh& mesh, const std::vector<Index>& new_of_old, Index new_
 
 }  // namespace
 
-Index weld_identical_vertices(Mesh& mesh) {
+std::vector<Index> identical_vertex_classes(const Mesh& mesh) {
   const Index n = mesh.num_vertices();
   const Attributes& a = mesh.attributes;
   // A vertex record: position then every attribute present, compared bit for bit.
@@ -111,7 +111,7 @@ Index weld_identical_vertices(Mesh& mesh) {
   for (Index v = 0; v < n; ++v) records[v] = record(v);
   std::stable_sort(order.begin(), order.end(),
                    [&](Index i, Index j) { return records[i] < records[j]; });
-  // Each group of equal records maps to its lowest index; keep first-occurrence order.
+  // Each group of equal records maps to its lowest index (stable sort: the group's first).
   std::vector<Index> representative(static_cast<std::size_t>(n));
   for (std::size_t i = 0; i < order.size();) {
     std::size_t j = i;
@@ -119,6 +119,12 @@ Index weld_identical_vertices(Mesh& mesh) {
     for (std::size_t k = i; k < j; ++k) representative[order[k]] = order[i];
     i = j;
   }
+  return representative;
+}
+
+Index weld_identical_vertices(Mesh& mesh) {
+  const Index n = mesh.num_vertices();
+  const std::vector<Index> representative = identical_vertex_classes(mesh);
   std::vector<Index> new_of_old(static_cast<std::size_t>(n), -1);
   Index next = 0;
   for (Index v = 0; v < n; ++v)

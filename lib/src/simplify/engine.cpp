@@ -110,10 +110,13 @@ void Engine::setup(const Mesh& mesh) {
   version_.assign(static_cast<std::size_t>(points), 0);
   dirty_.assign(static_cast<std::size_t>(points), 0);
 
-  // Faces; a face whose corners are not three distinct points cannot take part and is dropped.
+  // Faces on canonical wedges (identical vertices merged, so an unwelded soup is not all seams); a
+  // face whose corners are not three distinct points cannot take part and is dropped.
+  const std::vector<Index> canonical = identical_vertex_classes(mesh);
   std::vector<std::array<Index, 3>> point_faces;
   for (Index f = 0; f < mesh.num_faces(); ++f) {
-    const std::array<Index, 3> w{mesh.triangles(f, 0), mesh.triangles(f, 1), mesh.triangles(f, 2)};
+    const std::array<Index, 3> w{canonical[mesh.triangles(f, 0)], canonical[mesh.triangles(f, 1)],
+                                 canonical[mesh.triangles(f, 2)]};
     const std::array<Index, 3> p{s_.point_of[w[0]], s_.point_of[w[1]], s_.point_of[w[2]]};
     s_.face.push_back(w);
     const Eigen::Vector3d n0 = (mesh.positions.row(w[1]) - mesh.positions.row(w[0]))
