@@ -72,8 +72,8 @@ class Decimator {
   // Builds the star of v and classifies it.
   void star(Index v, Star& s) {
     s = Star{};
-    s.faces.clear();
     std::vector<std::pair<Index, Index>> next;  // a -> b for each face (v, a, b)
+    double area = 0;
     for (Index f : point_faces_[v]) {
       if (!alive_[f]) continue;
       const Tri& t = face_[f];
@@ -81,16 +81,12 @@ class Decimator {
       next.push_back({t[(k + 1) % 3], t[(k + 2) % 3]});
       s.faces.push_back(f);
       const Eigen::Vector3d a = position_[t[0]], b = position_[t[1]], c = position_[t[2]];
-      const Eigen::Vector3d n2 = (b - a).cross(c - a);
+      const Eigen::Vector3d n2 = (b - a).cross(c - a);  // twice the area, along the normal
       s.normal += n2;
       s.centre += 0.5 * n2.norm() * (a + b + c) / 3.0;
+      area += 0.5 * n2.norm();
     }
     if (next.empty()) return;
-    double area = 0;
-    for (Index f : s.faces) {
-      const Tri& t = face_[f];
-      area += 0.5 * (position_[t[1]] - position_[t[0]]).cross(position_[t[2]] - position_[t[0]]).norm();
-    }
     if (!(area > 0) || !(s.normal.norm() > 0)) return;
     s.centre /= area;
     s.normal.normalize();

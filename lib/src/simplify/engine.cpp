@@ -70,7 +70,8 @@ class Engine {
   }
   void collapse(Index u, Index v, const Candidate& c);
   void neighbours(Index p, std::vector<Index>& out);
-  std::string stop_report(Index target);
+  /// Why the remaining edges cannot collapse: the sentence, and whether the error limit blocked any.
+  std::string stop_report(Index target, bool& error_limited);
 
   SimplifyOptions o_;
   EngineState s_;
@@ -430,7 +431,7 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
   for (Index w : ring) push_edge(v, w);
 }
 
-std::string Engine::stop_report(Index target) {
+std::string Engine::stop_report(Index target, bool& error_limited) {
   // Classify every remaining edge by why it cannot collapse.
   std::size_t counts[static_cast<int>(Rejection::kCount)] = {};
   std::vector<Index> ring;
@@ -447,6 +448,7 @@ std::string Engine::stop_report(Index target) {
       counts[static_cast<int>(std::max(a, b))]++;
     }
   }
+  error_limited = counts[static_cast<int>(Rejection::ErrorLimit)] > 0;
   const char* names[] = {"", "locked (non-manifold or locked boundary) vertices", "topology (link condition)",
                          "boundary rules", "attribute seams", "face flips", "slivers", "the error limit", "the cost"};
   std::string why;
@@ -458,7 +460,6 @@ std::string Engine::stop_report(Index target) {
 }
 
 SimplifyResult Engine::run(Index target) {
-  const auto start = std::chrono::steady_clock::now();
   SimplifyResult result;
   result.faces_in = s_.input->num_faces();
   result.vertices_in = s_.input->num_vertices();
@@ -471,16 +472,12 @@ SimplifyResult Engine::run(Index target) {
       if (!s_.face_dead[f])
         faces.push_back({s_.corner_point(Index(f), 0), s_.corner_point(Index(f), 1), s_.corner_point(Index(f), 2)});
     heap_.reserve(faces.size() * 3);
-    for (const EdgeUse& e : classify_edges(faces)) {
-      Candidate ca, cb;
-      if (e.faces > 2) continue;
-      push_edge(e.lo, e.hi);
-    }
+    for (const EdgeUse& e : classify_edges(faces))
+      if (e.faces <= 2) push_edge(e.lo, e.hi);
   }
 
   const Index to_remove = std::max<Index>(1, s_.alive_faces - target);
   Index next_report = 0;
-  bool error_blocked = false;
   // A two-face collapse kept back when only one face is left to remove.
   std::optional<std::pair<Index, Index>> deferred;
   Candidate c;
@@ -518,9 +515,9 @@ SimplifyResult Engine::run(Index target) {
     result.reason = StopReason::TargetReached;
     result.reason_text = fmt::format("reached the target: {} faces (target {})", s_.alive_faces, target);
   } else {
-    result.reason_text = stop_report(target);
-    error_blocked = o_.max_error && result.reason_text.find("the error limit") != std::string::npos;
-    result.reason = error_blocked ? StopReason::ErrorLimit : StopReason::NoLegalCollapse;
+    bool error_limited = false;
+    result.reason_text = stop_report(target, error_limited);
+    result.reason = error_limited ? StopReason::ErrorLimit : StopReason::NoLegalCollapse;
   }
 
   // Output: surviving faces in input order; surviving wedges in input order with their point's position.
@@ -582,7 +579,6 @@ SimplifyResult Engine::run(Index target) {
   result.locked_vertices = locked_;
   result.dropped_degenerate_faces = dropped_;
   result.records = std::move(records_);
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (o_.progress) o_.progress(1.0);
   return result;
 }
