@@ -87,6 +87,14 @@ struct CollapseRecord {
   double error;                     ///< error estimate of the collapse
   std::vector<Index> removed_faces;                      ///< faces that vanish
   std::vector<std::array<Index, 3>> changed_corners;     ///< (face, corner, old vertex)
+  /// Each vertex (wedge) of `removed` and the vertex of `kept` it merged into: one pair per wedge, so
+  /// an attribute seam through the edge stays a seam.
+  std::vector<std::array<Index, 2>> wedge_map;
+  /// With attribute weights, the merged vertices take new attribute values: these vertices, and their
+  /// values before and after, in the layout of the mesh's attributes (normals 3, UVs 2, colours 4, for
+  /// those the mesh has), `attribute_values_per_vertex` numbers each.
+  std::vector<Index> attribute_vertices;
+  std::vector<double> attributes_before, attributes_after;
 };
 
 struct SimplifyResult {
@@ -105,7 +113,14 @@ struct SimplifyResult {
   double seconds = 0.0;
   std::vector<Index> vertex_origin; ///< for each output vertex, its input vertex
   std::vector<CollapseRecord> records;
+  /// With record_collapses: for each input vertex, the point (vertices welded by position) that the
+  /// records' `removed` and `kept` number, and for each input vertex the identical vertex (same
+  /// position and attributes) that stands for it in faces and records.
+  std::vector<Index> vertex_point, vertex_canonical;
 };
+
+/// Numbers per vertex in the attribute layout of `mesh` (normals 3, UVs 2, colours 4, for those present).
+int attribute_values_per_vertex(const Mesh& mesh);
 
 /// \throw Error for invalid options (ratio outside 0..1, negative targets) or an invalid mesh.
 SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options = {});

@@ -70,6 +70,9 @@ class Engine {
   }
   void collapse(Index u, Index v, const Candidate& c);
   void neighbours(Index p, std::vector<Index>& out);
+  /// Wedge w's attributes as the output has them (optimised values unscaled, normals unit length,
+  /// colours clamped to float), in the layout of attribute_values_per_vertex().
+  void output_attributes(Index w, double* out) const;
   /// Why the remaining edges cannot collapse: the sentence, and whether the error limit blocked any.
   std::string stop_report(Index target, bool& error_limited);
 
@@ -219,6 +222,31 @@ void Engine::setup_attributes(const Mesh& mesh) {
     const double area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm();
     for (int c = 0; c < 3; ++c) s_.attribute_quadrics.add_face(static_cast<std::size_t>(s_.face[f][c]), p, values, area);
   }
+}
+
+void Engine::output_attributes(Index w, double* out) const {
+  const Attributes& a = s_.input->attributes;
+  const std::size_t k = static_cast<std::size_t>(s_.attribute_quadrics.dims());
+  const double* value = k ? &s_.wedge_value[k * static_cast<std::size_t>(w)] : nullptr;
+  int i = 0, j = 0;  // i: output layout, j: optimised values
+  if (s_.input->has_normals()) {
+    if (attribute_layout_[0]) {
+      Eigen::Vector3d n;
+      for (int d = 0; d < 3; ++d, ++j) n[d] = value[j] / attribute_scale_[j];
+      if (n.norm() > 0) n.normalize();
+      else n = a.normals.row(w).transpose();
+      for (int d = 0; d < 3; ++d) out[i++] = n[d];
+    } else {
+      for (int d = 0; d < 3; ++d) out[i++] = a.normals(w, d);
+    }
+  }
+  if (s_.input->has_uvs())
+    for (int d = 0; d < 2; ++d, j += attribute_layout_[1])
+      out[i++] = attribute_layout_[1] ? value[j] / attribute_scale_[j] : a.uvs(w, d);
+  if (s_.input->has_colours())
+    for (int d = 0; d < 4; ++d, j += attribute_layout_[2])
+      out[i++] = attribute_layout_[2] ? double(static_cast<float>(std::clamp(value[j] / attribute_scale_[j], 0.0, 1.0)))
+                                      : double(a.colours(w, d));
 }
 
 void Engine::neighbours(Index p, std::vector<Index>& out) {
@@ -374,8 +402,9 @@ void Engine::push_edge(Index a, Index b) {
 void Engine::collapse(Index u, Index v, const Candidate& c) {
   CollapseRecord* rec = nullptr;
   if (o_.record_collapses) {
-    records_.push_back({u, v, s_.position[v], c.position, c.error, {}, {}});
+    records_.push_back({u, v, s_.position[v], c.position, c.error, {}, {}, {}, {}, {}, {}});
     rec = &records_.back();
+    for (int i = 0; i < s_.wedge_map_size; ++i) rec->wedge_map.push_back({s_.wedge_map[i].first, s_.wedge_map[i].second});
   }
   for (Index f : shared_) {
     s_.face_dead[f] = 1;
@@ -406,10 +435,20 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
   if (s_.attribute_quadrics.enabled()) {
     // The kept wedges take the attribute values that minimise the merged attribute error.
     const std::size_t k = static_cast<std::size_t>(s_.attribute_quadrics.dims());
+    const std::size_t layout = static_cast<std::size_t>(attribute_values_per_vertex(*s_.input));
     for (int i = 0; i < s_.wedge_map_size; ++i) {
       const auto [wu, wv] = s_.wedge_map[i];
+      if (rec) {
+        rec->attribute_vertices.push_back(wv);
+        rec->attributes_before.resize(rec->attributes_before.size() + layout);
+        output_attributes(wv, &rec->attributes_before[rec->attributes_before.size() - layout]);
+      }
       s_.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), c.position, &s_.wedge_value[k * wv]);
       s_.attribute_quadrics.merge(std::size_t(wv), std::size_t(wu));
+      if (rec) {
+        rec->attributes_after.resize(rec->attributes_after.size() + layout);
+        output_attributes(wv, &rec->attributes_after[rec->attributes_after.size() - layout]);
+      }
     }
   }
   s_.point_faces[u].clear();
@@ -549,20 +588,13 @@ SimplifyResult Engine::run(Index target) {
   }
   if (s_.attribute_quadrics.enabled()) {
     // Attributes the cost optimised come from the wedges' current values.
-    const std::size_t k = static_cast<std::size_t>(s_.attribute_quadrics.dims());
+    std::vector<double> value(static_cast<std::size_t>(attribute_values_per_vertex(in)));
     for (Index i = 0; i < nv; ++i) {
-      const double* value = &s_.wedge_value[k * static_cast<std::size_t>(result.vertex_origin[i])];
+      output_attributes(result.vertex_origin[i], value.data());
       int j = 0;
-      if (attribute_layout_[0]) {
-        Eigen::Vector3d n;
-        for (int d = 0; d < 3; ++d, ++j) n[d] = value[j] / attribute_scale_[j];
-        if (n.norm() > 0) out.attributes.normals.row(i) = n.normalized().transpose();
-      }
-      if (attribute_layout_[1])
-        for (int d = 0; d < 2; ++d, ++j) out.attributes.uvs(i, d) = value[j] / attribute_scale_[j];
-      if (attribute_layout_[2])
-        for (int d = 0; d < 4; ++d, ++j)
-          out.attributes.colours(i, d) = static_cast<float>(std::clamp(value[j] / attribute_scale_[j], 0.0, 1.0));
+      if (in.has_normals()) for (int d = 0; d < 3; ++d) out.attributes.normals(i, d) = value[j++];
+      if (in.has_uvs()) for (int d = 0; d < 2; ++d) out.attributes.uvs(i, d) = value[j++];
+      if (in.has_colours()) for (int d = 0; d < 4; ++d) out.attributes.colours(i, d) = static_cast<float>(value[j++]);
     }
   }
   Index row = 0;
@@ -579,6 +611,10 @@ SimplifyResult Engine::run(Index target) {
   result.locked_vertices = locked_;
   result.dropped_degenerate_faces = dropped_;
   result.records = std::move(records_);
+  if (o_.record_collapses) {
+    result.vertex_point = s_.point_of;
+    result.vertex_canonical = identical_vertex_classes(in);
+  }
   if (o_.progress) o_.progress(1.0);
   return result;
 }
@@ -606,6 +642,10 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   SimplifyResult r = engine.run(target);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
+}
+
+int attribute_values_per_vertex(const Mesh& mesh) {
+  return 3 * mesh.has_normals() + 2 * mesh.has_uvs() + 4 * mesh.has_colours();
 }
 
 std::string to_string(SimplifyMethod method) {

@@ -1,0 +1,214 @@
+#pragma once
+// Progressive meshes (Hoppe, "Progressive meshes", SIGGRAPH 1996): a coarse base mesh M0 and an
+// ordered list of vertex splits, each undoing one edge collapse of simplify(), so that applying the
+// first i splits gives level M_i and applying all of them gives the input M_n again.
+//
+// Numbering ("stream order"): points (positions), wedges (mesh vertices: a point with one set of
+// attributes) and faces are numbered in the order they appear. Level i holds exactly the first
+// points, wedges and faces, so a level is a prefix and moving between levels touches only the splits
+// crossed. Split i creates point `base_points + i`, its wedges and its one or two faces; it moves the
+// corners of some faces of the split point over to the new point's wedges.
+//
+// Error bound: every collapse maps the input simplicially onto the coarser mesh, so the Hausdorff
+// distance between M_i and M_n is at most the largest distance from an input vertex to its
+// representative's position in M_i. Each point keeps a bounding ball of the input vertices it stands
+// for, and `level_error[i]` is a running maximum of |position - centre| + radius: conservative, and
+// non-increasing as levels get finer.
+#include <lodkit/mesh.h>
+#include <lodkit/simplify.h>
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace lodkit {
+
+/// One vertex split: point `point` (s) splits into s and the new point t = base_points + index.
+struct VertexSplit {
+  Index point = 0;
+  Index first_wedge = 0, num_wedges = 0;    ///< t's new wedges, numbered contiguously
+  Index first_face = 0, num_faces = 0;      ///< the new faces (2, or 1 on a boundary)
+  Index first_change = 0, num_changes = 0;  ///< into ProgressiveMesh::corner_changes
+  Index first_attribute_change = 0, num_attribute_changes = 0;  ///< into attribute_changes
+  Eigen::Vector3d position{0, 0, 0};         ///< s after the split (finer level)
+  Eigen::Vector3d coarse_position{0, 0, 0};  ///< s before the split (coarser level)
+  Eigen::Vector3d new_position{0, 0, 0};     ///< t
+};
+
+/// A face corner that moves from one of s's wedges to one of t's when the split is applied.
+struct CornerChange {
+  Index corner;  ///< 3 * face + k
+  Index coarse_wedge, fine_wedge;
+};
+
+/// A wedge whose attribute values differ between the two sides of a split (attribute-aware costs).
+struct AttributeChange {
+  Index wedge;
+  Index first_value;  ///< into attribute_values: `attribute_dims` coarse values, then as many fine ones
+};
+
+struct ProgressiveMesh {
+  Index base_points = 0, base_wedges = 0, base_faces = 0;
+  std::vector<VertexSplit> splits;
+
+  /// Per point: its position in M0 (base points only; later points start at their split's new_position).
+  std::vector<Eigen::Vector3d> base_positions;
+  /// Per wedge (all levels): its point, and the wedge of the split point it split from (-1 in M0).
+  std::vector<Index> wedge_point, wedge_parent;
+  /// Per face (all levels): its corners' wedges when it first appears (M0 for base faces).
+  std::vector<std::array<Index, 3>> face_corners;
+  std::vector<CornerChange> corner_changes;
+
+  /// Attributes, in the layout normals (3), UVs (2), colours (4) for those the mesh has. Per wedge,
+  /// its values when it first appears; changes in attribute_changes.
+  bool has_normals = false, has_uvs = false, has_colours = false, has_face_colours = false;
+  int attribute_dims = 0;
+  std::vector<double> wedge_attributes;
+  std::vector<AttributeChange> attribute_changes;
+  std::vector<double> attribute_values;
+  Colours face_colours;  ///< per face, then per extra face, when has_face_colours
+
+  /// Conservative Hausdorff bound between level i and the finest level, for i = 0 .. splits.size().
+  std::vector<double> level_error;
+  /// The finest level's bounding box (for screen-space selection).
+  Eigen::AlignedBox3d bounds;
+
+  /// Input numbering, when known (built in memory, or a stream that keeps the order): the input vertex
+  /// of each wedge and the input face of each face. Empty otherwise.
+  std::vector<Index> wedge_input, face_input;
+  /// What the input had beyond the stream's faces and wedges, restored only at the finest level so that
+  /// it equals the input exactly: its vertex and face counts, vertices no face uses or that duplicate
+  /// another exactly (positions and attributes per `extra_vertex_input`), faces too degenerate to
+  /// take part (three input vertices each) and corners that referenced a duplicate.
+  Index input_vertices = 0, input_faces = 0;
+  std::vector<Index> extra_vertex_input;
+  Mesh extra_vertices;
+  std::vector<Index> extra_face_input;
+  Triangles extra_faces;
+  std::vector<std::array<Index, 3>> corner_exceptions;  ///< (input face, corner, input vertex)
+
+  Index num_levels() const { return static_cast<Index>(splits.size()) + 1; }
+  Index max_level() const { return static_cast<Index>(splits.size()); }
+  Index num_points(Index level) const { return base_points + level; }
+  Index num_wedges(Index level) const {
+    return level == 0 ? base_wedges : splits[level - 1].first_wedge + splits[level - 1].num_wedges;
+  }
+  Index num_faces(Index level) const {
+    return level == 0 ? base_faces : splits[level - 1].first_face + splits[level - 1].num_faces;
+  }
+  bool knows_input_order() const { return !wedge_input.empty(); }
+};
+
+struct ProgressiveOptions {
+  /// The simplification whose collapses the splits undo (any method; its targets are ignored).
+  SimplifyOptions simplify{};
+  /// Stop collapsing at this many faces; by default go as far as legal collapses go.
+  std::optional<Index> base_faces{};
+};
+
+/// Builds the progressive mesh of `mesh`. \throw Error for an invalid mesh or options.
+ProgressiveMesh build_progressive_mesh(const Mesh& mesh, const ProgressiveOptions& options = {});
+
+/// Checks the internal consistency of a progressive mesh (index ranges, counts). \throw Error.
+void validate(const ProgressiveMesh& pm, const std::string& context = "progressive mesh");
+
+enum class VertexOrder {
+  Input,   ///< vertices and faces in input order (like simplify()), when the order is known
+  Stream,  ///< in order of appearance
+};
+
+/// A mesh extracted from a progressive mesh, with where its vertices come from.
+struct ExtractedLevel {
+  Mesh mesh;
+  Index level = 0;
+  std::vector<Index> vertex_wedge;   ///< for each vertex, its wedge (stream order)
+  std::vector<Index> vertex_origin;  ///< for each vertex, its input vertex (its wedge when unknown)
+};
+
+/// Walks between levels. Holds the current level's positions, attributes and corners; refine() and
+/// coarsen() cost time proportional to the split's size, so moving k levels costs O(k).
+class PMCursor {
+ public:
+  /// Starts at level 0 (the base mesh). `pm` must outlive the cursor.
+  explicit PMCursor(const ProgressiveMesh& pm);
+
+  Index level() const { return level_; }
+  Index num_faces() const { return pm_->num_faces(level_); }
+  Index num_wedges() const { return pm_->num_wedges(level_); }
+  double error_bound() const { return pm_->level_error[static_cast<std::size_t>(level_)]; }
+
+  /// Applies the next split; false at the finest level.
+  bool refine();
+  /// Undoes the last split; false at the base.
+  bool coarsen();
+  /// Moves to `level` (clamped to 0 .. max_level) by refining or coarsening.
+  void go_to(Index level);
+
+  /// The current level as a mesh. At the finest level, in input order, it equals the input exactly.
+  ExtractedLevel extract(VertexOrder order = VertexOrder::Input) const;
+
+  /// The wedge that stands for `wedge` at `level` (itself when it exists there).
+  Index ancestor(Index wedge, Index level) const;
+  const Eigen::Vector3d& point_position(Index point) const { return positions_[static_cast<std::size_t>(point)]; }
+  const double* wedge_attributes(Index wedge) const {
+    return attributes_.data() + static_cast<std::size_t>(pm_->attribute_dims) * static_cast<std::size_t>(wedge);
+  }
+  Index corner_wedge(Index face, int k) const { return corners_[3 * static_cast<std::size_t>(face) + k]; }
+
+ private:
+  const ProgressiveMesh* pm_;
+  Index level_ = 0;
+  std::vector<Eigen::Vector3d> positions_;  // per point, all levels (later points undefined until split)
+  std::vector<double> attributes_;          // per wedge
+  std::vector<Index> corners_;              // per face corner
+};
+
+/// Level i of `pm` (a convenience over PMCursor).
+ExtractedLevel extract_level(const ProgressiveMesh& pm, Index level, VertexOrder order = VertexOrder::Input);
+
+/// A geomorph between a coarse level and a fine level: the fine level's connectivity, with every vertex
+/// starting at its ancestor's position and attributes in the coarse level.
+struct Geomorph {
+  Index coarse_level = 0, fine_level = 0;
+  ExtractedLevel fine;              ///< the fine level (the end, alpha = 1)
+  Positions start_positions;        ///< per fine vertex: its ancestor's position in the coarse level
+  Normals start_normals;
+  TexCoords start_uvs;
+  Colours start_colours;
+
+  /// The mesh at `alpha` in [0, 1]: exactly the coarse level's shape at 0 and the fine level at 1.
+  Mesh at(double alpha) const;
+  /// As at(), reusing `out`'s storage (connectivity is copied only when the face count differs).
+  void evaluate(double alpha, Mesh& out) const;
+};
+
+/// \throw Error unless 0 <= coarse_level <= fine_level <= max_level.
+Geomorph make_geomorph(const ProgressiveMesh& pm, Index coarse_level, Index fine_level,
+                       VertexOrder order = VertexOrder::Input);
+
+/// What a viewer sees: how many pixels of error are acceptable for a model at `distance` from the eye
+/// (to the centre of its bounding sphere), with vertical field of view `fov_degrees` over a viewport
+/// `viewport_pixels` high.
+struct ScreenSpaceBudget {
+  double pixel_error = 1.0;
+  double distance = 10.0;
+  double fov_degrees = 60.0;
+  double viewport_pixels = 1080.0;
+};
+
+/// The pixels an object-space error projects to: error * H / (2 d tan(fov / 2)), d the distance from
+/// the eye to the nearest point of the bounding sphere (`radius` around the centre at `distance`).
+/// Infinite when the eye is inside the sphere.
+double projected_pixels(double error, double radius, const ScreenSpaceBudget& view);
+
+/// The finest level with at most `faces` faces (level 0 if even the base has more).
+Index level_for_faces(const ProgressiveMesh& pm, Index faces);
+/// The coarsest level whose error bound is at most `max_error` (the finest level if none is).
+Index level_for_error(const ProgressiveMesh& pm, double max_error);
+/// The coarsest level whose error bound projects to at most view.pixel_error pixels.
+Index level_for_view(const ProgressiveMesh& pm, const ScreenSpaceBudget& view);
+/// The bounding sphere radius used by level_for_view (half the bounding box diagonal).
+double bounding_radius(const ProgressiveMesh& pm);
+
+}  // namespace lodkit

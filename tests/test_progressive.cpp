@@ -1,0 +1,266 @@
+// Progressive meshes in memory: exact refinement, navigation, agreement with simplify(), geomorphs and
+// level selection.
+#include <gtest/gtest.h>
+#include <lodkit/error.h>
+#include <lodkit/metrics.h>
+#include <lodkit/primitives.h>
+#include <lodkit/progressive.h>
+
+#include <map>
+#include <random>
+#include <set>
+
+#include "test_util.h"
+
+namespace lodkit {
+namespace {
+
+/// Bit-for-bit equality of two meshes (positions, triangles, every attribute).
+void expect_identical(const Mesh& a, const Mesh& b, const std::string& what) {
+  ASSERT_EQ(a.num_vertices(), b.num_vertices()) << what;
+  ASSERT_EQ(a.num_faces(), b.num_faces()) << what;
+  EXPECT_TRUE(a.positions == b.positions) << what;
+  EXPECT_TRUE(a.triangles == b.triangles) << what;
+  EXPECT_TRUE(a.attributes.normals == b.attributes.normals) << what;
+  EXPECT_TRUE(a.attributes.uvs == b.attributes.uvs) << what;
+  EXPECT_TRUE(a.attributes.colours == b.attributes.colours) << what;
+  EXPECT_TRUE(a.attributes.face_colours == b.attributes.face_colours) << what;
+}
+
+Mesh seamed_sphere() {
+  UvSphereOptions o;
+  o.segments = 24;
+  o.rings = 12;
+  o.uvs = true;
+  Mesh m = make_uv_sphere(o);
+  m.attributes.normals = compute_vertex_normals(m);
+  return m;
+}
+
+/// A mesh with everything a real file can have besides clean triangles: an unreferenced vertex, an
+/// exact duplicate vertex used by one corner, a degenerate face, per-face colours.
+Mesh awkward_mesh() {
+  Mesh m = test::bumpy_sphere(2, 0.05);
+  const Index n = m.num_vertices();
+  m.positions.conservativeResize(n + 2, 3);
+  m.positions.row(n) = Eigen::RowVector3d(5, 5, 5);       // unreferenced
+  m.positions.row(n + 1) = m.positions.row(m.triangles(0, 0));  // duplicate of a used vertex
+  m.triangles(0, 0) = n + 1;
+  const Index f = m.num_faces();
+  m.triangles.conservativeResize(f + 1, 3);
+  m.triangles.row(f) << 1, 1, 2;  // degenerate
+  m.attributes.face_colours.resize(f + 1, 4);
+  for (Index i = 0; i <= f; ++i) m.attributes.face_colours.row(i) << float(i % 7) / 7.0f, 0.5f, float(i % 3) / 3.0f, 1.0f;
+  return m;
+}
+
+TEST(ProgressiveMesh, FullRefinementReproducesTheInputExactly) {
+  for (const Mesh& input : {test::bumpy_sphere(3, 0.05), seamed_sphere(), make_grid({}), awkward_mesh()}) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    validate(pm);
+    EXPECT_GT(pm.max_level(), 0);
+    EXPECT_LT(pm.num_faces(0), input.num_faces() / 4);
+    const ExtractedLevel full = extract_level(pm, pm.max_level());
+    expect_identical(full.mesh, input, "finest level");
+  }
+}
+
+TEST(ProgressiveMesh, EveryMethodBuildsAndRefinesExactly) {
+  const Mesh input = test::bumpy_sphere(2, 0.05);
+  for (SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe, SimplifyMethod::EdgeLength}) {
+    ProgressiveOptions o;
+    o.simplify.method = method;
+    const ProgressiveMesh pm = build_progressive_mesh(input, o);
+    validate(pm);
+    expect_identical(extract_level(pm, pm.max_level()).mesh, input, to_string(method));
+  }
+}
+
+TEST(ProgressiveMesh, LevelsEqualSimplifyToTheSameFaceCount) {
+  for (const Mesh& input : {test::bumpy_sphere(3, 0.05), seamed_sphere(), make_grid({})}) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    for (Index level : {Index(0), pm.max_level() / 7, pm.max_level() / 2, pm.max_level() - 1}) {
+      SimplifyOptions so;
+      so.target_faces = pm.num_faces(level);
+      const SimplifyResult r = simplify(input, so);
+      const ExtractedLevel e = extract_level(pm, level);
+      expect_identical(e.mesh, r.mesh, "level " + std::to_string(level));
+      EXPECT_EQ(e.vertex_origin, r.vertex_origin);
+    }
+  }
+}
+
+TEST(ProgressiveMesh, LevelsEqualSimplifyWithAttributeAwareCosts) {
+  ProgressiveOptions o;
+  o.simplify.attribute_weights.uvs = 1.0;
+  o.simplify.attribute_weights.normals = 0.5;
+  const Mesh input = seamed_sphere();
+  const ProgressiveMesh pm = build_progressive_mesh(input, o);
+  EXPECT_FALSE(pm.attribute_changes.empty());
+  for (Index level : {Index(0), pm.max_level() / 3}) {
+    SimplifyOptions so = o.simplify;
+    so.target_faces = pm.num_faces(level);
+    const SimplifyResult r = simplify(input, so);
+    const Mesh m = extract_level(pm, level).mesh;
+    ASSERT_EQ(m.num_vertices(), r.mesh.num_vertices());
+    EXPECT_TRUE(m.triangles == r.mesh.triangles);
+    EXPECT_TRUE(m.positions == r.mesh.positions);
+    // Wedges the cost never touched keep their input values here and come back rescaled from
+    // simplify(): equal to rounding.
+    EXPECT_LT((m.attributes.uvs - r.mesh.attributes.uvs).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LT((m.attributes.normals - r.mesh.attributes.normals).cwiseAbs().maxCoeff(), 1e-12);
+  }
+  expect_identical(extract_level(pm, pm.max_level()).mesh, input, "finest level");
+}
+
+TEST(ProgressiveMesh, RandomWalksAgreeWithDirectExtraction) {
+  const Mesh input = seamed_sphere();
+  ProgressiveOptions o;
+  o.simplify.attribute_weights.uvs = 1.0;  // attribute changes must be undone too
+  const ProgressiveMesh pm = build_progressive_mesh(input, o);
+  PMCursor cursor(pm);
+  std::mt19937 rng(3);
+  for (int step = 0; step < 40; ++step) {
+    const Index target = std::uniform_int_distribution<Index>(0, pm.max_level())(rng);
+    if (step % 2) {
+      cursor.go_to(target);
+    } else {  // single steps
+      while (cursor.level() < target) ASSERT_TRUE(cursor.refine());
+      while (cursor.level() > target) ASSERT_TRUE(cursor.coarsen());
+    }
+    ASSERT_EQ(cursor.level(), target);
+    expect_identical(cursor.extract().mesh, extract_level(pm, target).mesh, "walk to " + std::to_string(target));
+  }
+  cursor.go_to(pm.max_level());
+  EXPECT_FALSE(cursor.refine());
+  cursor.go_to(0);
+  EXPECT_FALSE(cursor.coarsen());
+}
+
+TEST(ProgressiveMesh, EveryLevelIsAClosedManifoldWithTheSameGenus) {
+  const Mesh input = make_torus({});
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  PMCursor cursor(pm);
+  for (Index level = 0; level <= pm.max_level(); level += std::max<Index>(1, pm.max_level() / 25)) {
+    cursor.go_to(level);
+    const Mesh m = cursor.extract().mesh;
+    // Euler characteristic of a torus (welded by position) is 0; every edge has exactly two faces.
+    std::map<std::pair<Index, Index>, int> edges;
+    const Eigen::VectorX<Index> cls = position_classes(m);
+    std::set<Index> points;
+    for (Index f = 0; f < m.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const Index a = cls[m.triangles(f, k)], b = cls[m.triangles(f, (k + 1) % 3)];
+        points.insert(a);
+        edges[{std::min(a, b), std::max(a, b)}]++;
+      }
+    for (const auto& [e, n] : edges) ASSERT_EQ(n, 2) << "level " << level;
+    EXPECT_EQ(Index(points.size()) - Index(edges.size()) + m.num_faces(), 0) << "level " << level;
+    // Near the base the torus is a handful of faces whose nearest input face can lie across the hole.
+    if (m.num_faces() >= input.num_faces() / 10) {
+      EXPECT_EQ(count_flipped_faces(input, m), 0) << "level " << level;
+    }
+  }
+}
+
+TEST(ProgressiveMesh, ErrorBoundHoldsAndShrinksWithTheLevel) {
+  const Mesh input = test::bumpy_sphere(3, 0.08);
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  EXPECT_EQ(pm.level_error.back(), 0.0);
+  for (std::size_t i = 1; i < pm.level_error.size(); ++i) EXPECT_LE(pm.level_error[i], pm.level_error[i - 1]);
+  for (Index level : {Index(0), pm.max_level() / 10, pm.max_level() / 3, pm.max_level() - 2}) {
+    const Comparison c = compare(input, extract_level(pm, level).mesh);
+    EXPECT_LE(c.hausdorff, pm.level_error[level] * (1 + 1e-9)) << "level " << level;
+  }
+}
+
+TEST(ProgressiveMesh, BaseFacesStopsEarly) {
+  const Mesh input = test::bumpy_sphere(3, 0.05);
+  ProgressiveOptions o;
+  o.base_faces = 500;
+  const ProgressiveMesh pm = build_progressive_mesh(input, o);
+  EXPECT_LE(pm.num_faces(0), 500);
+  EXPECT_GE(pm.num_faces(0), 498);
+  EXPECT_THROW(build_progressive_mesh(input, {{}, Index(-1)}), Error);
+}
+
+TEST(ProgressiveMesh, AncestorsLeadToCoarserWedgesOfTheSamePointFamily) {
+  const ProgressiveMesh pm = build_progressive_mesh(seamed_sphere());
+  PMCursor cursor(pm);
+  const Index fine = pm.max_level(), coarse = pm.max_level() / 4;
+  for (Index w = 0; w < pm.num_wedges(fine); ++w) {
+    const Index a = cursor.ancestor(w, coarse);
+    ASSERT_GE(a, 0);
+    EXPECT_LT(a, pm.num_wedges(coarse));
+    if (w < pm.num_wedges(coarse)) {
+      EXPECT_EQ(a, w);
+    }
+  }
+}
+
+TEST(Geomorph, EndpointsAreTheTwoLevels) {
+  const Mesh input = seamed_sphere();
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  const Index from = pm.max_level() / 5, to = pm.max_level() / 2;
+  const Geomorph g = make_geomorph(pm, from, to);
+  const Mesh end = g.at(1.0), start = g.at(0.0);
+  expect_identical(end, extract_level(pm, to).mesh, "alpha = 1");
+  EXPECT_TRUE(start.triangles == end.triangles);
+  // At alpha = 0 every vertex sits where its ancestor is in the coarse level, so the surface is the
+  // coarse level's: zero distance both ways, and the same area.
+  const Mesh coarse = extract_level(pm, from).mesh;
+  const Comparison c = compare(coarse, start);
+  EXPECT_LT(c.hausdorff, 1e-12);
+  const ExtractedLevel coarse_level = extract_level(pm, from);
+  for (Index v = 0; v < start.num_vertices(); ++v) {
+    const Eigen::RowVector3d p = start.positions.row(v);
+    bool found = false;
+    for (Index u = 0; u < coarse.num_vertices() && !found; ++u) found = coarse.positions.row(u) == p;
+    ASSERT_TRUE(found) << "vertex " << v << " is not at a coarse vertex";
+  }
+  // Halfway, positions are the average.
+  const Mesh half = g.at(0.5);
+  EXPECT_LT((half.positions - 0.5 * (start.positions + end.positions)).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_THROW(make_geomorph(pm, to, from), Error);
+}
+
+TEST(LevelSelection, PixelBudgetPicksTheCoarsestLevelWithinBudget) {
+  const ProgressiveMesh pm = build_progressive_mesh(test::bumpy_sphere(3, 0.05));
+  const double radius = bounding_radius(pm);
+  for (double pixels : {0.5, 1.0, 4.0}) {
+    for (double distance : {3.0, 10.0, 40.0}) {
+      ScreenSpaceBudget view{pixels, distance, 60.0, 1080.0};
+      const Index level = level_for_view(pm, view);
+      EXPECT_LE(projected_pixels(pm.level_error[level], radius, view), pixels);
+      if (level > 0) {
+        EXPECT_GT(projected_pixels(pm.level_error[level - 1], radius, view), pixels);
+      }
+    }
+  }
+  // Farther away never needs a finer level.
+  EXPECT_LE(level_for_view(pm, {1.0, 50.0, 60.0, 1080.0}), level_for_view(pm, {1.0, 5.0, 60.0, 1080.0}));
+  // Inside the bounding sphere: the finest level.
+  EXPECT_EQ(level_for_view(pm, {1.0, 0.5 * radius, 60.0, 1080.0}), pm.max_level());
+  EXPECT_THROW(level_for_view(pm, {1.0, 10.0, 0.0, 1080.0}), Error);
+  // pixels = error * H / (2 d tan(fov/2)): 0.01 at d = 10 - r over 1000 px, 90 degrees.
+  EXPECT_NEAR(projected_pixels(0.01, 1.0, {1.0, 11.0, 90.0, 1000.0}), 0.01 * 1000 / 20.0, 1e-12);
+}
+
+TEST(LevelSelection, FaceCountsAndErrors) {
+  const ProgressiveMesh pm = build_progressive_mesh(test::bumpy_sphere(3, 0.05));
+  const Index full = pm.num_faces(pm.max_level());
+  EXPECT_EQ(level_for_faces(pm, full), pm.max_level());
+  EXPECT_EQ(level_for_faces(pm, 0), 0);
+  const Index l = level_for_faces(pm, full / 2);
+  EXPECT_LE(pm.num_faces(l), full / 2);
+  EXPECT_GT(pm.num_faces(l + 1), full / 2);
+  const double budget = pm.level_error[pm.max_level() / 2];
+  const Index e = level_for_error(pm, budget);
+  EXPECT_LE(pm.level_error[e], budget);
+  if (e > 0) {
+    EXPECT_GT(pm.level_error[e - 1], budget);
+  }
+}
+
+}  // namespace
+}  // namespace lodkit
