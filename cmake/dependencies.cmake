@@ -2,6 +2,7 @@
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)  # NO_MODULE: CGAL ships a FindEigen3 that would shadow the target
 find_package(fmt REQUIRED)
 find_package(draco REQUIRED)
+find_package(ZLIB REQUIRED)            # CRC-32 of .pm blocks
 find_package(TBB REQUIRED)
 find_package(Threads REQUIRED)
 find_package(CGAL REQUIRED)           # booleans (lib/src/csg/boolean.cpp only)

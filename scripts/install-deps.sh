@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
-  libopenmesh-dev libdraco-dev libosd-dev
+  libopenmesh-dev libdraco-dev libosd-dev zlib1g-dev
   libcli11-dev libfmt-dev nlohmann-json3-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libtinyobjloader-dev libmeshoptimizer-dev

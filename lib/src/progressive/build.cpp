@@ -179,12 +179,12 @@ ProgressiveMesh build_progressive_mesh(const Mesh& mesh, const ProgressiveOption
     for (Index i = 0; i < s.num_wedges; ++i) {
       const Index w = point_wedges[rec.removed][i];
       std::copy_n(&removed_values[c][dims * i], dims, &pm.wedge_attributes[dims * (next_wedge + i)]);
-      // The parent: the kept wedge this one merged into (or, if it was unused then, the first one).
+      // The parent: the kept wedge this one merged into (or, if it was unused then, the kept point's
+      // first wedge; the .pm reader derives the same).
       Index parent = -1;
       for (const auto& [wu, wv] : rec.wedge_map)
         if (wu == w) parent = wid(wv);
-      if (parent < 0 && !rec.wedge_map.empty()) parent = wid(rec.wedge_map.front()[1]);
-      if (parent < 0 && !point_wedges[rec.kept].empty()) parent = wid(point_wedges[rec.kept].front());
+      if (parent < 0) parent = wid(point_wedges[rec.kept].front());
       pm.wedge_parent[next_wedge + i] = parent;
     }
     next_wedge += s.num_wedges;

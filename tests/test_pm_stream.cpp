@@ -1,0 +1,211 @@
+// The .pm stream: exact lossless round trips, quantised size and accuracy, prefix reads, and damage
+// (every truncation, flipped bits) that must give a valid prefix or a clear error, never garbage.
+#include <gtest/gtest.h>
+#include <lodkit/error.h>
+#include <lodkit/metrics.h>
+#include <lodkit/pm_io.h>
+#include <lodkit/primitives.h>
+#include <lodkit/progressive.h>
+
+#include "test_util.h"
+
+namespace lodkit {
+namespace {
+
+bool same_mesh(const Mesh& a, const Mesh& b) {
+  return a.positions == b.positions && a.triangles == b.triangles && a.attributes.normals == b.attributes.normals &&
+         a.attributes.uvs == b.attributes.uvs && a.attributes.colours == b.attributes.colours &&
+         a.attributes.face_colours == b.attributes.face_colours;
+}
+
+Mesh attributed_sphere() {
+  UvSphereOptions o;
+  o.segments = 20;
+  o.rings = 10;
+  o.uvs = true;
+  Mesh m = make_uv_sphere(o);
+  m.attributes.normals = compute_vertex_normals(m);
+  m.attributes.colours.resize(m.num_vertices(), 4);
+  for (Index v = 0; v < m.num_vertices(); ++v)
+    m.attributes.colours.row(v) << float(v % 5) / 4.0f, 0.25f, 1.0f, 1.0f;
+  m.attributes.face_colours.resize(m.num_faces(), 4);
+  for (Index f = 0; f < m.num_faces(); ++f) m.attributes.face_colours.row(f) << 1.0f, float(f % 3) / 2.0f, 0.0f, 1.0f;
+  return m;
+}
+
+TEST(PmStream, LosslessRoundTripIsExactAtEveryLevel) {
+  for (const Mesh& input : {test::bumpy_sphere(3, 0.05), attributed_sphere(), make_grid({})}) {
+    ProgressiveOptions po;
+    po.simplify.attribute_weights.uvs = input.has_uvs() ? 1.0 : 0.0;
+    const ProgressiveMesh pm = build_progressive_mesh(input, po);
+    PmWriteOptions wo;
+    wo.splits_per_block = 37;
+    const std::string bytes = write_pm_to_memory(pm, wo);
+    const PmReadResult r = read_pm_from_memory(bytes, "mem.pm");
+    EXPECT_TRUE(r.complete);
+    EXPECT_TRUE(r.warning.empty()) << r.warning;
+    ASSERT_EQ(r.pm.max_level(), pm.max_level());
+    EXPECT_TRUE(same_mesh(extract_level(r.pm, r.pm.max_level()).mesh, input));
+    for (Index level : {Index(0), pm.max_level() / 3, pm.max_level() - 1}) {
+      EXPECT_TRUE(same_mesh(extract_level(r.pm, level).mesh, extract_level(pm, level).mesh)) << level;
+      EXPECT_GE(r.pm.level_error[level], pm.level_error[level]);
+      EXPECT_LE(r.pm.level_error[level], pm.level_error[level] * 1.05);
+    }
+  }
+}
+
+TEST(PmStream, AwkwardInputsSurviveTheStream) {
+  Mesh m = test::bumpy_sphere(2, 0.05);
+  const Index n = m.num_vertices();
+  m.positions.conservativeResize(n + 1, 3);
+  m.positions.row(n) = Eigen::RowVector3d(3, 3, 3);  // unreferenced
+  const Index f = m.num_faces();
+  m.triangles.conservativeResize(f + 1, 3);
+  m.triangles.row(f) << 0, 0, 1;  // degenerate
+  const ProgressiveMesh pm = build_progressive_mesh(m);
+  const PmReadResult r = read_pm_from_memory(write_pm_to_memory(pm), "mem.pm");
+  EXPECT_TRUE(same_mesh(extract_level(r.pm, r.pm.max_level()).mesh, m));
+}
+
+TEST(PmStream, QuantisedStreamIsCompactAndAccurate) {
+  TorusOptions to;
+  to.major_segments = 96;
+  to.minor_segments = 32;
+  const Mesh input = make_torus(to);  // 6144 faces, smooth
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  PmWriteOptions wo;
+  wo.position_bits = 14;
+  PmStreamStats stats;
+  const std::string bytes = write_pm_to_memory(pm, wo, &stats);
+  const double bits_per_vertex = 8.0 * double(bytes.size()) / input.num_vertices();
+  EXPECT_LT(bits_per_vertex, 90.0);  // 84 when written; raw 14-bit positions alone take 84 per split
+  EXPECT_EQ(stats.total_bytes, bytes.size());
+  const PmReadResult r = read_pm_from_memory(bytes, "mem.pm");
+  ASSERT_TRUE(r.complete);
+  EXPECT_EQ(r.position_bits, 14);
+  const Mesh full = extract_level(r.pm, r.pm.max_level(), VertexOrder::Stream).mesh;
+  EXPECT_EQ(full.num_faces(), input.num_faces());
+  const Eigen::AlignedBox3d box = bounding_box(input);
+  const double step = box.sizes().maxCoeff() / ((1 << 14) - 1);
+  EXPECT_LT(compare(input, full).hausdorff, step);
+  // Bounds stay conservative after quantisation.
+  for (Index level : {Index(0), pm.max_level() / 4, pm.max_level() / 2})
+    EXPECT_LE(compare(input, extract_level(r.pm, level).mesh).hausdorff, r.pm.level_error[level]);
+}
+
+TEST(PmStream, DracoBaseDecodesToTheSameLevels) {
+  const Mesh input = attributed_sphere();
+  ProgressiveOptions po;
+  po.base_faces = 120;
+  const ProgressiveMesh pm = build_progressive_mesh(input, po);
+  PmWriteOptions wo;
+  wo.position_bits = 16;
+  wo.draco_base = true;
+  wo.keep_order = true;  // faces keep their corner order, so triangles compare directly
+  const PmReadResult r = read_pm_from_memory(write_pm_to_memory(pm, wo), "mem.pm");
+  ASSERT_TRUE(r.complete);
+  EXPECT_EQ(r.pm.num_faces(0), pm.num_faces(0));
+  const Mesh a = extract_level(r.pm, r.pm.max_level(), VertexOrder::Stream).mesh;
+  const Mesh b = extract_level(pm, pm.max_level(), VertexOrder::Stream).mesh;
+  EXPECT_TRUE(a.triangles == b.triangles);
+  EXPECT_LT((a.positions - b.positions).cwiseAbs().maxCoeff(), 1e-3);
+  wo.position_bits = 0;
+  EXPECT_THROW(write_pm_to_memory(pm, wo), Error);
+}
+
+TEST(PmStream, PrefixReadStopsAtTheFaceBudget) {
+  const Mesh input = test::bumpy_sphere(3, 0.05);
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  PmWriteOptions wo;
+  wo.splits_per_block = 16;
+  const std::string bytes = write_pm_to_memory(pm, wo);
+  PmReadOptions ro;
+  ro.max_faces = 400;
+  const PmReadResult r = read_pm_from_memory(bytes, "mem.pm", ro);
+  EXPECT_FALSE(r.complete);
+  EXPECT_TRUE(r.warning.empty());
+  EXPECT_LE(r.pm.num_faces(r.pm.max_level()), 400);
+  EXPECT_GE(r.pm.num_faces(r.pm.max_level()), 398);
+  EXPECT_LT(r.bytes_read, bytes.size() / 2);
+  // The prefix's top level is the same mesh as the whole stream's level (in stream order).
+  EXPECT_TRUE(same_mesh(extract_level(r.pm, r.pm.max_level(), VertexOrder::Stream).mesh,
+                        extract_level(pm, r.pm.max_level(), VertexOrder::Stream).mesh));
+}
+
+TEST(PmStream, EveryTruncationGivesAValidPrefixOrAClearError) {
+  const Mesh input = test::bumpy_sphere(1, 0.05);  // 80 faces: a small stream, every byte tried
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  for (int bits : {0, 12}) {
+    PmWriteOptions wo;
+    wo.splits_per_block = 4;
+    wo.position_bits = bits;
+    const std::string bytes = write_pm_to_memory(pm, wo);
+    Index last_level = -1;
+    for (std::size_t n = 0; n < bytes.size(); ++n) {
+      try {
+        const PmReadResult r = read_pm_from_memory(std::string_view(bytes).substr(0, n), "cut.pm");
+        validate(r.pm);
+        EXPECT_FALSE(r.warning.empty()) << "no warning when cut at " << n;
+        EXPECT_GE(r.pm.max_level(), last_level);  // longer prefixes never give fewer levels
+        last_level = r.pm.max_level();
+        const Mesh m = extract_level(r.pm, r.pm.max_level(), VertexOrder::Stream).mesh;
+        validate(m);
+        if (bits == 0) {
+          EXPECT_TRUE(same_mesh(m, extract_level(pm, r.pm.max_level(), VertexOrder::Stream).mesh));
+        }
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("cut.pm"), std::string::npos);
+        EXPECT_EQ(last_level, -1) << "an error after a longer prefix had worked, at " << n;
+      }
+    }
+    EXPECT_EQ(last_level, pm.max_level()) << "the whole split list should be readable before the end block";
+  }
+}
+
+TEST(PmStream, FlippedBitsAreCaughtByTheChecksums) {
+  const Mesh input = test::bumpy_sphere(2, 0.05);
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  PmWriteOptions wo;
+  wo.splits_per_block = 8;
+  const std::string bytes = write_pm_to_memory(pm, wo);
+  for (std::size_t at = 0; at < bytes.size(); at += 97) {
+    std::string damaged = bytes;
+    damaged[at] = static_cast<char>(damaged[at] ^ (1 << (at % 8)));
+    try {
+      const PmReadResult r = read_pm_from_memory(damaged, "flip.pm");
+      // Either the flip hit a block (a warning and fewer levels or no order), or nothing it guards.
+      EXPECT_FALSE(r.warning.empty()) << "a flipped bit at " << at << " went unnoticed";
+      if (!r.warning.empty()) {
+        EXPECT_NE(r.warning.find("flip.pm"), std::string::npos);
+      }
+      // Whatever survived is exactly what the intact stream has.
+      EXPECT_TRUE(same_mesh(extract_level(r.pm, r.pm.max_level(), VertexOrder::Stream).mesh,
+                            extract_level(pm, r.pm.max_level(), VertexOrder::Stream).mesh));
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("flip.pm"), std::string::npos);
+    }
+  }
+}
+
+TEST(PmStream, FilesAreWrittenAtomicallyAndBadFilesAreNamed) {
+  test::ScratchDir dir("pm");
+  const ProgressiveMesh pm = build_progressive_mesh(test::bumpy_sphere(2, 0.05));
+  const PmStreamStats stats = write_pm(pm, dir / "a.pm");
+  EXPECT_EQ(std::filesystem::file_size(dir / "a.pm"), stats.total_bytes);
+  EXPECT_EQ(dir.entries(), 1u);
+  const PmReadResult r = read_pm(dir / "a.pm");
+  EXPECT_TRUE(r.complete);
+  test::write_text(dir / "text.pm", "solid nothing\n");
+  EXPECT_THROW(read_pm(dir / "text.pm"), Error);
+  test::write_text(dir / "empty.pm", "");
+  try {
+    read_pm(dir / "empty.pm");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("empty.pm"), std::string::npos);
+  }
+  EXPECT_THROW(read_pm(dir / "missing.pm"), Error);
+}
+
+}  // namespace
+}  // namespace lodkit
