@@ -32,7 +32,7 @@ Run 'lodkit <command> --help' for a command's options. Docs: docs/commands/.)");
   std::vector<Command> commands{add_info_command(app, global), add_convert_command(app, global),
                                 add_generate_command(app, global),
                                 add_simplify_command(app, global), add_compare_command(app, global),
-                                add_csg_command(app, global)};
+                                add_csg_command(app, global), add_pm_command(app, global)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -183,3 +183,64 @@ TEST(CliCsg, BooleansAndTreesEndToEnd) {
 
 }  // namespace
 }  // namespace lodkit
+
+namespace lodkit {
+namespace {
+
+TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
+  test::ScratchDir dir("cli-pm");
+  ASSERT_EQ(run(dir, "generate torus -o t.ply").status, 0);
+  CliRun r = run(dir, "pm build t.ply -o t.pm");
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run(dir, "pm info t.pm --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("\"input_order\": true"), std::string::npos);
+  // The full level in input order is the input itself.
+  const Mesh input = read_mesh(dir / "t.ply");
+  r = run(dir, "pm extract t.pm -o full.ply --ratio 1 --input-order");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Mesh full = read_mesh(dir / "full.ply");
+  EXPECT_TRUE(full.positions == input.positions && full.triangles == input.triangles);
+  r = run(dir, "pm extract t.pm -o small.obj --faces 300");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LE(read_mesh(dir / "small.obj").num_faces(), 300);
+  r = run(dir, "pm extract t.pm -o far.ply --pixel-error 1 --distance 100 --viewport 1080");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LT(read_mesh(dir / "far.ply").num_faces(), input.num_faces());
+  r = run(dir, "pm geomorph t.pm --from 200 --to 800 --frames 3 -o m.ply");
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* f : {"m_000.ply", "m_001.ply", "m_002.ply"}) EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  EXPECT_EQ(run(dir, "pm build t.ply -o q.pm --quantize 12 --draco").status, 0);
+  for (const char* cmd : {"pm --help", "pm build --help", "pm extract --help", "pm geomorph --help", "pm info --help"})
+    EXPECT_NE(run(dir, cmd).out.find("Example"), std::string::npos) << cmd;
+}
+
+TEST(CliPm, BadStreamsAndOptionsFailClearly) {
+  test::ScratchDir dir("cli-pm");
+  ASSERT_EQ(run(dir, "generate torus -o t.ply").status, 0);
+  ASSERT_EQ(run(dir, "pm build t.ply -o t.pm").status, 0);
+  // Refuses to overwrite its input.
+  CliRun r = run(dir, "pm extract t.pm -o t.pm --faces 100");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("t.pm"), std::string::npos);
+  EXPECT_GT(std::filesystem::file_size(dir / "t.pm"), 1000u);
+  // Not a stream.
+  r = run(dir, "pm info t.ply");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("t.ply"), std::string::npos);
+  // Truncated: the valid prefix and a warning.
+  const std::string bytes = test::read_bytes(dir / "t.pm");
+  test::write_text(dir / "cut.pm", bytes.substr(0, bytes.size() / 2));
+  r = run(dir, "pm extract cut.pm -o cut.ply --ratio 1");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("warning"), std::string::npos);
+  // Two selections at once, or none.
+  EXPECT_NE(run(dir, "pm extract t.pm -o x.ply --faces 10 --ratio 0.5").status, 0);
+  EXPECT_NE(run(dir, "pm extract t.pm -o x.ply").status, 0);
+  EXPECT_NE(run(dir, "pm build t.ply -o d.pm --draco").status, 0);  // Draco needs quantisation
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "d.pm"));
+}
+
+}  // namespace
+}  // namespace lodkit

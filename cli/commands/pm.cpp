@@ -1,0 +1,307 @@
+// lodkit pm build|info|extract|geomorph: progressive meshes and the .pm stream.
+#include <lodkit/error.h>
+#include <lodkit/pm_io.h>
+#include <lodkit/progressive.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fmt/format.h>
+#include <memory>
+
+#include "common.h"
+
+namespace lodkit::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct PmCliOptions {
+  // build
+  std::string input, output, method = "quadric";
+  std::optional<std::string> format;
+  std::optional<Index> base_faces;
+  int quantize = 0;
+  bool draco = false, keep_order = false, json = false;
+  Index block = 1024;
+  std::vector<double> attribute_weights;
+  // extract / geomorph
+  std::optional<Index> faces, from, to;
+  std::optional<double> ratio, pixel_error, alpha, max_error;
+  double distance = 10.0, fov = 60.0, viewport = 1080.0;
+  int frames = 0;
+  bool input_order = false;
+  std::optional<Index> rows;
+};
+
+void refuse_overwrite(const std::string& input, const std::string& output) {
+  std::error_code ec;
+  if (fs::exists(output, ec) && fs::equivalent(output, input, ec))
+    throw Error(fmt::format("{}: refusing to overwrite the input", output));
+}
+
+int run_build(const PmCliOptions& o, const GlobalOptions& global) {
+  const Mesh mesh = read_input(o.input, o.format);
+  if (o.output != "-") refuse_overwrite(o.input, o.output);
+  ProgressiveOptions p;
+  p.simplify.method = *parse_method(o.method);
+  p.base_faces = o.base_faces;
+  if (!o.attribute_weights.empty()) {
+    if (o.attribute_weights.size() != 3) throw Error("pm build: --attribute-weights takes three numbers: normals,uvs,colours");
+    p.simplify.attribute_weights = {o.attribute_weights[0], o.attribute_weights[1], o.attribute_weights[2]};
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const ProgressiveMesh pm = build_progressive_mesh(mesh, p);
+  const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  PmWriteOptions w;
+  w.position_bits = o.quantize;
+  w.draco_base = o.draco;
+  if (o.keep_order) w.keep_order = true;
+  w.splits_per_block = o.block;
+  const auto t1 = std::chrono::steady_clock::now();
+  const PmStreamStats stats = write_pm(pm, o.output, w);
+  const double write_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  const double bits_per_vertex = 8.0 * double(stats.total_bytes) / std::max<Index>(1, mesh.num_vertices());
+  if (o.json) {
+    fmt::print("{}\n", nlohmann::json{{"input", o.input}, {"output", o.output}, {"method", o.method},
+                                      {"faces", mesh.num_faces()}, {"vertices", mesh.num_vertices()},
+                                      {"base_faces", pm.num_faces(0)}, {"splits", pm.max_level()},
+                                      {"build_seconds", build_seconds}, {"write_seconds", write_seconds},
+                                      {"bytes", stats.total_bytes}, {"base_bytes", stats.base_bytes},
+                                      {"split_bytes", stats.split_bytes}, {"order_bytes", stats.order_bytes},
+                                      {"bits_per_vertex", bits_per_vertex}, {"position_bits", o.quantize}}
+                           .dump(2));
+  } else if (!global.quiet) {
+    fmt::print(stderr, "pm build ({}): {} faces -> base of {} faces + {} splits in {:.3f} s\n", o.method,
+               thousands(mesh.num_faces()), thousands(pm.num_faces(0)), thousands(pm.max_level()), build_seconds);
+    fmt::print(stderr, "  {}: {} bytes ({:.1f} bits per input vertex; base {}, splits {}, order {}) written in {:.3f} s\n",
+               o.output, thousands(static_cast<long long>(stats.total_bytes)), bits_per_vertex,
+               thousands(static_cast<long long>(stats.base_bytes)), thousands(static_cast<long long>(stats.split_bytes)),
+               thousands(static_cast<long long>(stats.order_bytes + stats.extra_bytes)), write_seconds);
+  }
+  return 0;
+}
+
+void warn(const PmReadResult& r, const GlobalOptions& global) {
+  if (!r.warning.empty() && !global.quiet) fmt::print(stderr, "warning: {}\n", r.warning);
+}
+
+int run_info(const PmCliOptions& o, const GlobalOptions& global) {
+  const PmReadResult r = read_pm(o.input);
+  warn(r, global);
+  const ProgressiveMesh& pm = r.pm;
+  const double diagonal = pm.bounds.isEmpty() ? 0.0 : pm.bounds.diagonal().norm();
+  const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
+  // A table of about `rows` levels, spaced evenly in log(faces), always with the base and the top.
+  const Index rows = std::max<Index>(2, o.rows.value_or(12));
+  std::vector<Index> levels;
+  const double f0 = std::max<Index>(1, pm.num_faces(0)), f1 = std::max<Index>(1, pm.num_faces(pm.max_level()));
+  for (Index i = 0; i < rows; ++i) {
+    const double faces = f0 * std::pow(f1 / f0, double(i) / double(rows - 1));
+    const Index level = level_for_faces(pm, static_cast<Index>(std::llround(faces)));
+    if (levels.empty() || levels.back() != level) levels.push_back(level);
+  }
+  if (levels.back() != pm.max_level()) levels.push_back(pm.max_level());
+  if (o.json) {
+    nlohmann::json table = nlohmann::json::array();
+    for (Index l : levels)
+      table.push_back({{"level", l}, {"faces", pm.num_faces(l)}, {"vertices", pm.num_wedges(l)},
+                       {"error_bound", pm.level_error[static_cast<std::size_t>(l)]},
+                       {"error_bound_percent", pm.level_error[static_cast<std::size_t>(l)] * pct}});
+    fmt::print("{}\n", nlohmann::json{{"file", o.input}, {"bytes", r.bytes_read}, {"complete", r.complete},
+                                      {"warning", r.warning}, {"position_bits", r.position_bits},
+                                      {"splits", pm.max_level()}, {"base_faces", pm.num_faces(0)},
+                                      {"faces", pm.num_faces(pm.max_level())}, {"vertices", pm.num_wedges(pm.max_level())},
+                                      {"bits_per_vertex", 8.0 * double(r.bytes_read) / std::max<Index>(1, pm.num_wedges(pm.max_level()))},
+                                      {"base_bytes", r.stats.base_bytes}, {"split_bytes", r.stats.split_bytes},
+                                      {"order_bytes", r.stats.order_bytes}, {"input_order", pm.knows_input_order()},
+                                      {"diagonal", diagonal}, {"levels", table}}
+                           .dump(2));
+    return 0;
+  }
+  fmt::print("{}: progressive mesh, {} ({}), {} bytes = {:.1f} bits per vertex\n", o.input,
+             r.position_bits ? fmt::format("{}-bit positions", r.position_bits) : std::string("lossless"),
+             pm.knows_input_order() ? "input order kept" : "stream order", thousands(static_cast<long long>(r.bytes_read)),
+             8.0 * double(r.bytes_read) / std::max<Index>(1, pm.num_wedges(pm.max_level())));
+  fmt::print("  base {} faces, {} splits up to {} faces, {} vertices; base {} bytes, splits {} bytes\n",
+             thousands(pm.num_faces(0)), thousands(pm.max_level()), thousands(pm.num_faces(pm.max_level())),
+             thousands(pm.num_wedges(pm.max_level())), thousands(static_cast<long long>(r.stats.base_bytes)),
+             thousands(static_cast<long long>(r.stats.split_bytes)));
+  fmt::print("  {:>9}  {:>11}  {:>11}  {:>13}  {:>9}\n", "level", "faces", "vertices", "error bound", "% diag");
+  for (Index l : levels)
+    fmt::print("  {:>9}  {:>11}  {:>11}  {:>13.6g}  {:>9.4f}\n", l, thousands(pm.num_faces(l)), thousands(pm.num_wedges(l)),
+               pm.level_error[static_cast<std::size_t>(l)], pm.level_error[static_cast<std::size_t>(l)] * pct);
+  return 0;
+}
+
+/// The level the selection options ask for, and a sentence saying why.
+Index choose_level(const PmCliOptions& o, const ProgressiveMesh& pm, std::string& why) {
+  const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
+  if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
+  if (o.faces) {
+    why = fmt::format("at most {} faces", *o.faces);
+    return level_for_faces(pm, *o.faces);
+  }
+  if (o.ratio) {
+    const Index faces = static_cast<Index>(std::llround(*o.ratio * pm.num_faces(pm.max_level())));
+    why = fmt::format("ratio {} = at most {} faces", *o.ratio, faces);
+    return level_for_faces(pm, faces);
+  }
+  if (o.max_error) {
+    why = fmt::format("error bound at most {}", *o.max_error);
+    return level_for_error(pm, *o.max_error);
+  }
+  const ScreenSpaceBudget view{*o.pixel_error, o.distance, o.fov, o.viewport};
+  const Index level = level_for_view(pm, view);
+  why = fmt::format("{} px budget at distance {}, fov {} deg, {} px viewport: bound projects to {:.3g} px", *o.pixel_error,
+                    o.distance, o.fov, o.viewport,
+                    projected_pixels(pm.level_error[static_cast<std::size_t>(level)], bounding_radius(pm), view));
+  return level;
+}
+
+int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
+  refuse_overwrite(o.input, o.output);
+  // Progressive read: with a face budget only the blocks that level needs are read.
+  PmReadOptions ro;
+  if (o.faces && !o.input_order) ro.max_faces = *o.faces;
+  const auto start = std::chrono::steady_clock::now();
+  const PmReadResult r = read_pm(o.input, ro);
+  warn(r, global);
+  std::string why;
+  const Index level = choose_level(o, r.pm, why);
+  const ExtractedLevel e = extract_level(r.pm, level, o.input_order ? VertexOrder::Input : VertexOrder::Stream);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  write_output(e.mesh, o.output, o.format, WriteOptions{}, o.input);
+  const double bound = r.pm.level_error[static_cast<std::size_t>(level)];
+  if (o.json) {
+    fmt::print("{}\n", nlohmann::json{{"file", o.input}, {"output", o.output}, {"level", level},
+                                      {"faces", e.mesh.num_faces()}, {"vertices", e.mesh.num_vertices()},
+                                      {"error_bound", bound}, {"bytes_read", r.bytes_read}, {"seconds", seconds},
+                                      {"why", why}}
+                           .dump(2));
+  } else if (!global.quiet) {
+    fmt::print(stderr, "pm extract: level {} of {}: {} faces, {} vertices, error bound {:.6g} ({}); read {} bytes, {:.1f} ms\n",
+               level, r.total_splits, thousands(e.mesh.num_faces()), thousands(e.mesh.num_vertices()), bound, why,
+               thousands(static_cast<long long>(r.bytes_read)), 1000 * seconds);
+  }
+  return 0;
+}
+
+int run_geomorph(const PmCliOptions& o, const GlobalOptions& global) {
+  refuse_overwrite(o.input, o.output);
+  const PmReadResult r = read_pm(o.input);
+  warn(r, global);
+  const ProgressiveMesh& pm = r.pm;
+  if (!o.from || !o.to) throw Error("pm geomorph: --from and --to face counts are required");
+  if (o.alpha.has_value() == (o.frames > 0)) throw Error("pm geomorph: give either --alpha or --frames");
+  const Index from = level_for_faces(pm, *o.from), to = level_for_faces(pm, *o.to);
+  if (from > to) throw Error(fmt::format("pm geomorph: --from ({} faces) must be coarser than --to ({} faces)", *o.from, *o.to));
+  const Geomorph g = make_geomorph(pm, from, to, o.input_order ? VertexOrder::Input : VertexOrder::Stream);
+  if (o.alpha) {
+    if (!(*o.alpha >= 0 && *o.alpha <= 1)) throw Error("pm geomorph: --alpha must be in [0, 1]");
+    write_output(g.at(*o.alpha), o.output, o.format, WriteOptions{}, o.input);
+  } else {
+    // morph.ply -> morph_000.ply ... morph_NNN.ply, alpha from 0 to 1.
+    const fs::path out(o.output);
+    Mesh frame;
+    for (int i = 0; i < o.frames; ++i) {
+      const double alpha = o.frames == 1 ? 1.0 : double(i) / double(o.frames - 1);
+      g.evaluate(alpha, frame);
+      const fs::path path = out.parent_path() / fmt::format("{}_{:03d}{}", out.stem().string(), i, out.extension().string());
+      write_output(frame, path.string(), o.format, WriteOptions{}, o.input);
+    }
+  }
+  if (!global.quiet)
+    fmt::print(stderr, "pm geomorph: level {} ({} faces) -> level {} ({} faces), {} vertices morphing{}\n", from,
+               thousands(pm.num_faces(from)), to, thousands(pm.num_faces(to)), thousands(g.fine.mesh.num_vertices()),
+               o.frames ? fmt::format(", {} frames", o.frames) : fmt::format(", alpha {}", *o.alpha));
+  return 0;
+}
+
+}  // namespace
+
+Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
+  auto opt = std::make_shared<PmCliOptions>();
+  CLI::App* pm = app.add_subcommand("pm", "Progressive meshes: build a .pm stream, inspect it, extract levels, geomorph");
+  pm->require_subcommand(1);
+  pm->footer(R"(Examples:
+  lodkit pm build bunny.ply -o bunny.pm
+  lodkit pm build bunny.ply -o bunny_q.pm --quantize 14
+  lodkit pm info bunny.pm
+  lodkit pm extract bunny.pm -o bunny_1k.ply --faces 1000
+  lodkit pm extract bunny.pm -o near.ply --pixel-error 1 --distance 0.5 --fov 60 --viewport 1080
+  lodkit pm geomorph bunny.pm --from 1000 --to 4000 --frames 30 -o morph.ply)");
+
+  CLI::App* build = pm->add_subcommand("build", "Build a progressive mesh from a mesh and write it as a .pm stream");
+  build->add_option("input", opt->input, "Input mesh, or - for stdin (with --format)")->required();
+  build->add_option("-o,--output", opt->output, "Output .pm file")->required();
+  build->add_option("--format", opt->format, "Format of stdin")->check(format_validator());
+  build->add_option("--method", opt->method, "Collapse cost: quadric, hoppe or edge-length")
+      ->check(CLI::IsMember({"quadric", "hoppe", "edge-length"}))->capture_default_str();
+  build->add_option("--base-faces", opt->base_faces, "Stop collapsing at this many faces (default: as far as legal)")
+      ->check(CLI::NonNegativeNumber);
+  build->add_option("--quantize", opt->quantize, "Position bits (quantised, compact stream); 0 = lossless")
+      ->check(CLI::Range(0, 30))->capture_default_str();
+  build->add_flag("--draco", opt->draco, "Compress the base mesh with Draco (needs --quantize)");
+  build->add_flag("--keep-order", opt->keep_order, "Store the input order in a quantised stream too");
+  build->add_option("--block", opt->block, "Splits per checksummed block")->check(CLI::Range(1, 1 << 24))->capture_default_str();
+  build->add_option("--attribute-weights", opt->attribute_weights, "Normal, UV and colour weights (quadric), e.g. 0,1,0")
+      ->delimiter(',')->check(CLI::NonNegativeNumber);
+  build->add_flag("--json", opt->json, "Print the result as JSON on stdout");
+  build->footer(R"(Lossless streams reproduce the input exactly (positions bit for bit, same triangles in the
+same order); --quantize BITS gives a compact stream in stream order.
+Examples:
+  lodkit pm build bunny.ply -o bunny.pm
+  lodkit pm build scan.obj -o scan.pm --quantize 14 --draco --base-faces 500
+  lodkit pm build spot.obj -o spot.pm --attribute-weights 0,1,0)");
+
+  CLI::App* info = pm->add_subcommand("info", "Levels, sizes and error bounds of a .pm file");
+  info->add_option("input", opt->input, "A .pm file")->required();
+  info->add_option("--rows", opt->rows, "Levels in the table")->check(CLI::Range(2, 10000));
+  info->add_flag("--json", opt->json, "Print as JSON");
+  info->footer("Example:\n  lodkit pm info bunny.pm --json");
+
+  CLI::App* extract = pm->add_subcommand("extract", "Write one level of a .pm file as a mesh");
+  extract->add_option("input", opt->input, "A .pm file")->required();
+  extract->add_option("-o,--output", opt->output, "Output mesh, or - for stdout (with --format)")->required();
+  extract->add_option("--format", opt->format, "Format of stdout")->check(format_validator());
+  extract->add_option("--faces", opt->faces, "The finest level with at most this many faces")->check(CLI::NonNegativeNumber);
+  extract->add_option("--ratio", opt->ratio, "... at most this fraction of the full face count")->check(CLI::Range(0.0, 1.0));
+  extract->add_option("--max-error", opt->max_error, "The coarsest level whose error bound is at most this distance")
+      ->check(CLI::NonNegativeNumber);
+  extract->add_option("--pixel-error", opt->pixel_error, "The coarsest level whose bound projects to at most this many pixels")
+      ->check(CLI::NonNegativeNumber);
+  extract->add_option("--distance", opt->distance, "Eye to bounding-sphere centre (with --pixel-error)")->capture_default_str();
+  extract->add_option("--fov", opt->fov, "Vertical field of view, degrees")->check(CLI::Range(0.01, 179.99))->capture_default_str();
+  extract->add_option("--viewport", opt->viewport, "Viewport height, pixels")->check(CLI::PositiveNumber)->capture_default_str();
+  extract->add_flag("--input-order", opt->input_order, "Vertices and faces in input order (reads the whole file)");
+  extract->add_flag("--json", opt->json, "Print the result as JSON on stdout");
+  extract->footer(R"(pixels = error * viewport / (2 * d * tan(fov / 2)), d = distance - bounding radius.
+With --faces only the blocks that level needs are read.
+Examples:
+  lodkit pm extract bunny.pm -o bunny_1k.ply --faces 1000
+  lodkit pm extract bunny.pm -o half.obj --ratio 0.5 --input-order
+  lodkit pm extract bunny.pm -o far.ply --pixel-error 0.5 --distance 2 --fov 45 --viewport 1440)");
+
+  CLI::App* morph = pm->add_subcommand("geomorph", "Blend between two levels (Hoppe's geomorphs)");
+  morph->add_option("input", opt->input, "A .pm file")->required();
+  morph->add_option("--from", opt->from, "Coarse level: at most this many faces")->required()->check(CLI::NonNegativeNumber);
+  morph->add_option("--to", opt->to, "Fine level: at most this many faces")->required()->check(CLI::NonNegativeNumber);
+  morph->add_option("--alpha", opt->alpha, "Blend weight: 0 looks like --from, 1 is --to");
+  morph->add_option("--frames", opt->frames, "Write this many frames OUT_000 ... with alpha from 0 to 1")->check(CLI::Range(1, 100000));
+  morph->add_option("-o,--output", opt->output, "Output mesh (or frame name pattern)")->required();
+  morph->add_option("--format", opt->format, "Format of stdout")->check(format_validator());
+  morph->add_flag("--input-order", opt->input_order, "Vertices and faces in input order");
+  morph->footer(R"(Examples:
+  lodkit pm geomorph bunny.pm --from 1000 --to 4000 --alpha 0.5 -o half.ply
+  lodkit pm geomorph bunny.pm --from 1000 --to 4000 --frames 30 -o morph.ply   # morph_000.ply ... morph_029.ply)");
+
+  return {pm, [opt, &global, build, info, extract] {
+            if (build->parsed()) return run_build(*opt, global);
+            if (info->parsed()) return run_info(*opt, global);
+            if (extract->parsed()) return run_extract(*opt, global);
+            return run_geomorph(*opt, global);
+          }};
+}
+
+}  // namespace lodkit::cli
