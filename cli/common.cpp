@@ -34,6 +34,12 @@ Mesh read_input(const std::string& path, const std::optional<std::string>& forma
   return read_mesh(path, with_format);
 }
 
+void refuse_to_overwrite(const std::string& path, const std::string& input) {
+  std::error_code ec;
+  if (!input.empty() && input != "-" && path != "-" && fs::exists(path, ec) && fs::equivalent(path, input, ec))
+    throw Error(fmt::format("{}: refusing to overwrite the input file; choose another output path", path));
+}
+
 void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,
                   const WriteOptions& options, const std::string& input) {
   if (path == "-") {
@@ -42,9 +48,7 @@ void write_output(const Mesh& mesh, const std::string& path, const std::optional
     std::fflush(stdout);
     return;
   }
-  std::error_code ec;
-  if (!input.empty() && input != "-" && fs::exists(path, ec) && fs::equivalent(path, input, ec))
-    throw Error(fmt::format("{}: refusing to overwrite the input file; choose another output path", path));
+  refuse_to_overwrite(path, input);
   WriteOptions with_format = options;
   if (format) with_format.format = stream_format(format, path.c_str());
   write_mesh(mesh, path, with_format);

@@ -35,6 +35,9 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global);
 Mesh read_input(const std::string& path, const std::optional<std::string>& format,
                 const ReadOptions& options = {});
 
+/// Throws if `path` names the same file as `input` (under any name); "-" and "" are never files.
+void refuse_to_overwrite(const std::string& path, const std::string& input);
+
 /// Writes to `path` atomically, or to stdout when it is "-" (then `format` names the format).
 /// Refuses to write over `input` (the same file under any name) unless it is empty.
 void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,

@@ -34,15 +34,9 @@ struct PmCliOptions {
   std::optional<Index> rows;
 };
 
-void refuse_overwrite(const std::string& input, const std::string& output) {
-  std::error_code ec;
-  if (fs::exists(output, ec) && fs::equivalent(output, input, ec))
-    throw Error(fmt::format("{}: refusing to overwrite the input", output));
-}
-
 int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   const Mesh mesh = read_input(o.input, o.format);
-  if (o.output != "-") refuse_overwrite(o.input, o.output);
+  refuse_to_overwrite(o.output, o.input);
   ProgressiveOptions p;
   p.simplify.method = *parse_method(o.method);
   p.base_faces = o.base_faces;
@@ -160,7 +154,7 @@ Index choose_level(const PmCliOptions& o, const ProgressiveMesh& pm, std::string
 }
 
 int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
-  refuse_overwrite(o.input, o.output);
+  refuse_to_overwrite(o.output, o.input);  // before reading: fail fast
   // Progressive read: with a face budget only the blocks that level needs are read.
   PmReadOptions ro;
   if (o.faces && !o.input_order) ro.max_faces = *o.faces;
@@ -188,7 +182,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
 }
 
 int run_geomorph(const PmCliOptions& o, const GlobalOptions& global) {
-  refuse_overwrite(o.input, o.output);
+  refuse_to_overwrite(o.output, o.input);  // before reading: fail fast
   const PmReadResult r = read_pm(o.input);
   warn(r, global);
   const ProgressiveMesh& pm = r.pm;

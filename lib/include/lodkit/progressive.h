@@ -157,6 +157,9 @@ class PMCursor {
   Index corner_wedge(Index face, int k) const { return corners_[3 * static_cast<std::size_t>(face) + k]; }
 
  private:
+  /// Writes split `split`'s changes in their fine (refine) or coarse (coarsen) state.
+  void apply(Index split, bool fine);
+
   const ProgressiveMesh* pm_;
   Index level_ = 0;
   std::vector<Eigen::Vector3d> positions_;  // per point, all levels (later points undefined until split)

@@ -91,10 +91,11 @@ struct CollapseRecord {
   /// an attribute seam through the edge stays a seam.
   std::vector<std::array<Index, 2>> wedge_map;
   /// With attribute weights, the merged vertices take new attribute values: these vertices, and their
-  /// values before and after, in the layout of the mesh's attributes (normals 3, UVs 2, colours 4, for
-  /// those the mesh has), `attribute_values_per_vertex` numbers each.
+  /// values after the collapse in the layout of the mesh's attributes (normals 3, UVs 2, colours 4, for
+  /// those the mesh has), `attribute_values_per_vertex` numbers each. (Their values before are the
+  /// input's or an earlier record's.)
   std::vector<Index> attribute_vertices;
-  std::vector<double> attributes_before, attributes_after;
+  std::vector<double> attributes_after;
 };
 
 struct SimplifyResult {

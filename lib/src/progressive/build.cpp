@@ -25,6 +25,13 @@ Ball merge(const Ball& a, const Ball& b) {
   return {c, r * (1 + 1e-12) + 1e-300};
 }
 
+/// The wedge of the kept point that wedge w of the removed point merged into (-1 if w was unused).
+Index merged_into(const CollapseRecord& rec, Index w) {
+  for (const auto& [wu, wv] : rec.wedge_map)
+    if (wu == w) return wv;
+  return -1;
+}
+
 void copy_attributes(const Mesh& mesh, Index v, double* out) {
   const Attributes& a = mesh.attributes;
   int i = 0;
@@ -89,15 +96,13 @@ ProgressiveMesh build_progressive_mesh(const Mesh& mesh, const ProgressiveOption
     for (Index w : point_wedges[rec.removed])
       removed_values[c].insert(removed_values[c].end(), &value[dims * w], &value[dims * w] + dims);
     for (const auto& [f, k, old] : rec.changed_corners) {
-      Index to = -1;
-      for (const auto& [wu, wv] : rec.wedge_map)
-        if (wu == old) to = wv;
+      const Index to = merged_into(rec, old);
       if (to < 0) throw Error("progressive mesh: internal error: a collapse record misses a wedge");
       corners[f][k] = to;
     }
     for (std::size_t i = 0; i < rec.attribute_vertices.size(); ++i) {
       double* v = &value[dims * rec.attribute_vertices[i]];
-      attributes_before[c].insert(attributes_before[c].end(), v, v + dims);  // exact, unlike the record's
+      attributes_before[c].insert(attributes_before[c].end(), v, v + dims);  // input values stay bit-exact
       std::copy_n(&rec.attributes_after[dims * i], dims, v);
     }
     position[rec.kept] = rec.kept_after;
@@ -181,11 +186,8 @@ ProgressiveMesh build_progressive_mesh(const Mesh& mesh, const ProgressiveOption
       std::copy_n(&removed_values[c][dims * i], dims, &pm.wedge_attributes[dims * (next_wedge + i)]);
       // The parent: the kept wedge this one merged into (or, if it was unused then, the kept point's
       // first wedge; the .pm reader derives the same).
-      Index parent = -1;
-      for (const auto& [wu, wv] : rec.wedge_map)
-        if (wu == w) parent = wid(wv);
-      if (parent < 0) parent = wid(point_wedges[rec.kept].front());
-      pm.wedge_parent[next_wedge + i] = parent;
+      const Index merged = merged_into(rec, w);
+      pm.wedge_parent[next_wedge + i] = wid(merged >= 0 ? merged : point_wedges[rec.kept].front());
     }
     next_wedge += s.num_wedges;
     s.first_face = static_cast<Index>(pm.face_input.size());
@@ -198,12 +200,8 @@ ProgressiveMesh build_progressive_mesh(const Mesh& mesh, const ProgressiveOption
     const std::vector<double>& before = attributes_before[nc - 1 - j];
     VertexSplit& s = pm.splits[j];
     s.first_change = static_cast<Index>(pm.corner_changes.size());
-    for (const auto& [f, k, old] : rec.changed_corners) {
-      Index to = -1;
-      for (const auto& [wu, wv] : rec.wedge_map)
-        if (wu == old) to = wv;
-      pm.corner_changes.push_back({3 * face_id[f] + k, wid(to), wid(old)});
-    }
+    for (const auto& [f, k, old] : rec.changed_corners)
+      pm.corner_changes.push_back({3 * face_id[f] + k, wid(merged_into(rec, old)), wid(old)});
     s.num_changes = static_cast<Index>(pm.corner_changes.size()) - s.first_change;
     s.first_attribute_change = static_cast<Index>(pm.attribute_changes.size());
     for (std::size_t i = 0; i < rec.attribute_vertices.size(); ++i) {

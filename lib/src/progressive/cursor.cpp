@@ -20,35 +20,30 @@ PMCursor::PMCursor(const ProgressiveMesh& pm) : pm_(&pm) {
     for (int k = 0; k < 3; ++k) corners_[3 * f + k] = pm.face_corners[f][k];
 }
 
-bool PMCursor::refine() {
-  if (level_ >= pm_->max_level()) return false;
-  const VertexSplit& s = pm_->splits[static_cast<std::size_t>(level_)];
+void PMCursor::apply(Index split, bool fine) {
+  const VertexSplit& s = pm_->splits[static_cast<std::size_t>(split)];
   const CornerChange* c = pm_->corner_changes.data() + s.first_change;
-  for (Index i = 0; i < s.num_changes; ++i) corners_[static_cast<std::size_t>(c[i].corner)] = c[i].fine_wedge;
-  positions_[static_cast<std::size_t>(s.point)] = s.position;
+  for (Index i = 0; i < s.num_changes; ++i)
+    corners_[static_cast<std::size_t>(c[i].corner)] = fine ? c[i].fine_wedge : c[i].coarse_wedge;
+  positions_[static_cast<std::size_t>(s.point)] = fine ? s.position : s.coarse_position;
+  // attribute_values holds the coarse values, then the fine ones.
   const std::size_t dims = static_cast<std::size_t>(pm_->attribute_dims);
   for (Index i = 0; i < s.num_attribute_changes; ++i) {
     const AttributeChange& a = pm_->attribute_changes[static_cast<std::size_t>(s.first_attribute_change + i)];
-    std::copy_n(&pm_->attribute_values[static_cast<std::size_t>(a.first_value) + dims], dims,
+    std::copy_n(&pm_->attribute_values[static_cast<std::size_t>(a.first_value) + (fine ? dims : 0)], dims,
                 &attributes_[dims * static_cast<std::size_t>(a.wedge)]);
   }
-  ++level_;
+}
+
+bool PMCursor::refine() {
+  if (level_ >= pm_->max_level()) return false;
+  apply(level_++, true);
   return true;
 }
 
 bool PMCursor::coarsen() {
   if (level_ <= 0) return false;
-  --level_;
-  const VertexSplit& s = pm_->splits[static_cast<std::size_t>(level_)];
-  const CornerChange* c = pm_->corner_changes.data() + s.first_change;
-  for (Index i = 0; i < s.num_changes; ++i) corners_[static_cast<std::size_t>(c[i].corner)] = c[i].coarse_wedge;
-  positions_[static_cast<std::size_t>(s.point)] = s.coarse_position;
-  const std::size_t dims = static_cast<std::size_t>(pm_->attribute_dims);
-  for (Index i = 0; i < s.num_attribute_changes; ++i) {
-    const AttributeChange& a = pm_->attribute_changes[static_cast<std::size_t>(s.first_attribute_change + i)];
-    std::copy_n(&pm_->attribute_values[static_cast<std::size_t>(a.first_value)], dims,
-                &attributes_[dims * static_cast<std::size_t>(a.wedge)]);
-  }
+  apply(--level_, false);
   return true;
 }
 

@@ -132,7 +132,6 @@ bool decode_base(std::string_view payload, const Header& h, StreamState& st, Pro
   const std::size_t nw = h.base_wedges, nf = h.base_faces, np = h.base_points;
   std::vector<std::uint32_t> faces, colour_codes;
   std::vector<float> colours;
-  const double colour_cells = std::exp2(h.colour_bits) - 1;
   if (kind == kRawBase) {
     st.position.resize(np);
     for (auto& p : st.position)
@@ -207,7 +206,7 @@ bool decode_base(std::string_view payload, const Header& h, StreamState& st, Pro
       st.attribute.push_back(st.attribute_quantiser[i % static_cast<std::size_t>(dims)].value(st.qattribute[i]));
     if (h.flags & kFaceColours) {
       if (colour_codes.size() != 4 * nf) return fail("bad base face colours");
-      for (std::uint32_t c : colour_codes) colours.push_back(static_cast<float>(c / colour_cells));
+      for (std::uint32_t c : colour_codes) colours.push_back(face_colour_value(c, h.colour_bits));
     }
   }
   if (faces.size() != 3 * nf) return fail("bad base faces");
@@ -251,8 +250,8 @@ bool decode_base(std::string_view payload, const Header& h, StreamState& st, Pro
 
 namespace {
 
-/// Decodes one block of splits into `pm`, applying each to the state. Stops after `stop_faces` is
-/// exceeded (returns the number decoded). False if the block is malformed.
+/// Decodes one block of splits into `pm`, applying each to the state; sets `stopped` and returns
+/// before the first split that would exceed `stop_faces`. False, with `why`, if the block is malformed.
 bool decode_block(std::string_view payload, const Header& h, StreamState& st, ProgressiveMesh& pm, double slack,
                   std::optional<Index> stop_faces, bool& stopped, std::string& why) {
   ByteReader r(payload.data(), payload.size());
@@ -382,7 +381,7 @@ bool decode_block(std::string_view payload, const Header& h, StreamState& st, Pr
         for (int c = 0; c < 4; ++c) {
           if (st.quantised) {
             if (!in[kFaceColour].next(v)) return bad("missing face colour");
-            rec.face_colours[static_cast<std::size_t>(i)][c] = static_cast<float>(v / (std::exp2(h.colour_bits) - 1));
+            rec.face_colours[static_cast<std::size_t>(i)][c] = face_colour_value(v, h.colour_bits);
           } else if (!raw.get(rec.face_colours[static_cast<std::size_t>(i)][c])) {
             return bad("missing face colour");
           }

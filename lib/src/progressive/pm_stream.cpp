@@ -167,35 +167,34 @@ namespace lodkit::detail::pm {
 
 namespace {
 /// The point of wedge w before the split is applied (new wedges belong to the new point).
-Index point_before(const SplitRecord& r, const StreamState& st, Index w, Index t) {
-  (void)r;
+Index point_before(const StreamState& st, Index w, Index t) {
   return w >= st.num_wedges() ? t : st.wedge_point[static_cast<std::size_t>(w)];
+}
+
+/// New face i's wedges of the split point and of the new point (-1 where missing).
+std::pair<Index, Index> split_and_new_wedge(const SplitRecord& r, const StreamState& st, Index i) {
+  const Index t = st.num_points();
+  Index ws = -1, wt = -1;
+  for (Index w : r.faces[static_cast<std::size_t>(i)]) {
+    const Index p = point_before(st, w, t);
+    if (p == t) wt = w;
+    else if (p == r.point) ws = w;
+  }
+  return {ws, wt};
 }
 }  // namespace
 
 Index paired_fine_wedge(const SplitRecord& r, const StreamState& st, Index coarse) {
-  const Index t = st.num_points();
   for (Index i = 0; i < r.num_faces; ++i) {
-    Index ws = -1, wt = -1;
-    for (Index w : r.faces[static_cast<std::size_t>(i)]) {
-      const Index p = point_before(r, st, w, t);
-      if (p == t) wt = w;
-      else if (p == r.point) ws = w;
-    }
+    const auto [ws, wt] = split_and_new_wedge(r, st, i);
     if (ws == coarse && wt >= 0) return wt;
   }
   return -1;
 }
 
 Index parent_wedge(const SplitRecord& r, const StreamState& st, Index fine) {
-  const Index t = st.num_points();
   for (Index i = 0; i < r.num_faces; ++i) {
-    Index ws = -1, wt = -1;
-    for (Index w : r.faces[static_cast<std::size_t>(i)]) {
-      const Index p = point_before(r, st, w, t);
-      if (p == t) wt = w;
-      else if (p == r.point) ws = w;
-    }
+    const auto [ws, wt] = split_and_new_wedge(r, st, i);
     if (wt == fine && ws >= 0) return ws;
   }
   return st.point_first_wedge[static_cast<std::size_t>(r.point)];
@@ -207,7 +206,7 @@ void predict_positions(const StreamState& st, const SplitRecord& r, std::array<s
   std::vector<Index> ring_t, ring_s;
   auto add_points_of = [&](const std::array<Index, 3>& corners, std::vector<Index>& ring) {
     for (Index w : corners) {
-      const Index p = point_before(r, st, w, t);
+      const Index p = point_before(st, w, t);
       if (p != s && p != t) ring.push_back(p);
     }
   };

@@ -4,6 +4,7 @@
 // writer codes every split against exactly what the reader will have when it decodes it).
 #include <lodkit/progressive.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
@@ -103,6 +104,12 @@ struct Quantiser {
   std::int64_t q(double x) const { return std::llround((x - offset) / step); }
   double value(std::int64_t q) const { return offset + static_cast<double>(q) * step; }
 };
+
+/// Face colours in quantised mode: channel codes on 2^bits - 1 steps over [0, 1].
+inline std::uint32_t face_colour_code(float v, int bits) {
+  return static_cast<std::uint32_t>(std::llround(std::clamp(v, 0.f, 1.f) * (std::exp2(bits) - 1)));
+}
+inline float face_colour_value(std::uint32_t code, int bits) { return static_cast<float>(code / (std::exp2(bits) - 1)); }
 
 /// Error bounds as 16-bit codes on a log scale (2^(1/16) apart, relative to `reference`), rounded up so
 /// that the decoded bound is never below the true one. Code 0 is zero.

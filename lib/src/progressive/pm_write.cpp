@@ -69,7 +69,7 @@ std::string encode_base(const ProgressiveMesh& pm, const Header& h, const std::v
   std::vector<std::uint32_t> colour_codes;
   if (pm.has_face_colours && kind != 0)
     for (Index f = 0; f < pm.base_faces; ++f)
-      for (int c = 0; c < 4; ++c) colour_codes.push_back(static_cast<std::uint32_t>(std::llround(std::clamp(pm.face_colours(f, c), 0.f, 1.f) * (std::exp2(o.colour_bits) - 1))));
+      for (int c = 0; c < 4; ++c) colour_codes.push_back(face_colour_code(pm.face_colours(f, c), o.colour_bits));
 
   if (kind == kRawBase) {
     for (const Eigen::Vector3d& p : pm.base_positions) b.put(p.x()), b.put(p.y()), b.put(p.z());
@@ -253,9 +253,9 @@ SplitRecord code_split(const ProgressiveMesh& pm, std::size_t j, const StreamSta
       for (int c = 0; c < 4; ++c) {
         const float v = pm.face_colours(vs.first_face + i, c);
         if (st.quantised) {
-          const auto code = static_cast<std::uint32_t>(std::llround(std::clamp(v, 0.f, 1.f) * (std::exp2(o.colour_bits) - 1)));
+          const std::uint32_t code = face_colour_code(v, o.colour_bits);
           out[kFaceColour].push_back(code);
-          r.face_colours[i][c] = static_cast<float>(code / (std::exp2(o.colour_bits) - 1));
+          r.face_colours[i][c] = face_colour_value(code, o.colour_bits);
         } else {
           r.face_colours[i][c] = v;
           raw.put(v);
@@ -370,7 +370,6 @@ std::string write_pm_to_memory(const ProgressiveMesh& pm, const PmWriteOptions& 
     stats.order_bytes = out.size() - before;
 
     ByteWriter x;
-    const std::size_t dims = static_cast<std::size_t>(pm.attribute_dims);
     x.put_symbols({pm.extra_vertex_input.begin(), pm.extra_vertex_input.end()});
     for (std::size_t i = 0; i < pm.extra_vertex_input.size(); ++i) {
       const Index row = static_cast<Index>(i);
@@ -379,7 +378,6 @@ std::string write_pm_to_memory(const ProgressiveMesh& pm, const PmWriteOptions& 
       if (pm.has_uvs) for (int d = 0; d < 2; ++d) x.put(pm.extra_vertices.attributes.uvs(row, d));
       if (pm.has_colours) for (int d = 0; d < 4; ++d) x.put(pm.extra_vertices.attributes.colours(row, d));
     }
-    (void)dims;
     x.put_symbols({pm.extra_face_input.begin(), pm.extra_face_input.end()});
     std::vector<std::uint32_t> tri;
     for (Index f = 0; f < pm.extra_faces.rows(); ++f)

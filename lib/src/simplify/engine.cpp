@@ -402,7 +402,7 @@ void Engine::push_edge(Index a, Index b) {
 void Engine::collapse(Index u, Index v, const Candidate& c) {
   CollapseRecord* rec = nullptr;
   if (o_.record_collapses) {
-    records_.push_back({u, v, s_.position[v], c.position, c.error, {}, {}, {}, {}, {}, {}});
+    records_.push_back({u, v, s_.position[v], c.position, c.error, {}, {}, {}, {}, {}});
     rec = &records_.back();
     for (int i = 0; i < s_.wedge_map_size; ++i) rec->wedge_map.push_back({s_.wedge_map[i].first, s_.wedge_map[i].second});
   }
@@ -438,14 +438,10 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
     const std::size_t layout = static_cast<std::size_t>(attribute_values_per_vertex(*s_.input));
     for (int i = 0; i < s_.wedge_map_size; ++i) {
       const auto [wu, wv] = s_.wedge_map[i];
-      if (rec) {
-        rec->attribute_vertices.push_back(wv);
-        rec->attributes_before.resize(rec->attributes_before.size() + layout);
-        output_attributes(wv, &rec->attributes_before[rec->attributes_before.size() - layout]);
-      }
       s_.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), c.position, &s_.wedge_value[k * wv]);
       s_.attribute_quadrics.merge(std::size_t(wv), std::size_t(wu));
       if (rec) {
+        rec->attribute_vertices.push_back(wv);
         rec->attributes_after.resize(rec->attributes_after.size() + layout);
         output_attributes(wv, &rec->attributes_after[rec->attributes_after.size() - layout]);
       }
