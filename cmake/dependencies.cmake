@@ -7,6 +7,10 @@ find_package(TBB REQUIRED)
 find_package(Threads REQUIRED)
 find_package(CGAL REQUIRED)           # booleans (lib/src/csg/boolean.cpp only)
 find_package(nlohmann_json 3 REQUIRED)
+# OpenSubdiv: Debian's OpenSubdivConfig lists static libraries it does not ship, so find the shared
+# CPU library and the headers directly.
+find_library(LODKIT_OSD_CPU osdCPU REQUIRED)
+find_path(LODKIT_OSD_INCLUDE opensubdiv/far/topologyRefiner.h REQUIRED)
 if(LODKIT_BUILD_CLI)
   find_package(CLI11 REQUIRED)
 endif()
