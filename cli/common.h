@@ -30,6 +30,8 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global);
 Command add_compare_command(CLI::App& app, const GlobalOptions& global);
 Command add_csg_command(CLI::App& app, const GlobalOptions& global);
 Command add_pm_command(CLI::App& app, const GlobalOptions& global);
+Command add_terrain_command(CLI::App& app, const GlobalOptions& global);
+Command add_subdivide_command(CLI::App& app, const GlobalOptions& global);
 
 /// Reads `path`, or stdin when it is "-" (then `format` names the format).
 Mesh read_input(const std::string& path, const std::optional<std::string>& format,

@@ -27,12 +27,14 @@ int main(int argc, char** argv) {
   lodkit convert torus.ply torus.drc --quantize 14
   lodkit simplify bunny.ply -o bunny_small.ply --ratio 0.1 --measure
   lodkit compare bunny.ply bunny_small.ply
+  lodkit terrain -o mountain.ply --levels 8 --colour
 Run 'lodkit <command> --help' for a command's options. Docs: docs/commands/.)");
 
   std::vector<Command> commands{add_info_command(app, global), add_convert_command(app, global),
                                 add_generate_command(app, global),
                                 add_simplify_command(app, global), add_compare_command(app, global),
-                                add_csg_command(app, global), add_pm_command(app, global)};
+                                add_csg_command(app, global), add_pm_command(app, global),
+                                add_terrain_command(app, global), add_subdivide_command(app, global)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace lodkit {
 
@@ -30,6 +31,10 @@ struct ReadOptions {
   /// Merge vertices with identical positions and attributes after reading. STL is always welded by
   /// position (it stores each triangle's corners separately).
   bool weld = false;
+  /// When set, receives the corner count of every polygon in file order; polygon k became
+  /// count - 2 consecutive fan triangles (corner 0 with each pair of neighbours). STL and Draco
+  /// report 3 for every face. Subdivision uses it to recover quads.
+  std::vector<int>* polygon_sizes = nullptr;
 };
 
 /// Reads a mesh; the format comes from `options.format` or else the extension.

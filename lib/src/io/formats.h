@@ -10,14 +10,15 @@
 #include <cmath>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "io/output.h"
 
 namespace lodkit::detail {
 
-Mesh read_obj(std::string_view bytes, const std::string& name);
-Mesh read_ply(std::string_view bytes, const std::string& name);
-Mesh read_off(std::string_view bytes, const std::string& name);
+Mesh read_obj(std::string_view bytes, const std::string& name, std::vector<int>* polygon_sizes = nullptr);
+Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>* polygon_sizes = nullptr);
+Mesh read_off(std::string_view bytes, const std::string& name, std::vector<int>* polygon_sizes = nullptr);
 Mesh read_stl(std::string_view bytes, const std::string& name);
 Mesh read_drc(std::string_view bytes, const std::string& name);
 

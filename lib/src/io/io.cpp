@@ -52,15 +52,18 @@ MeshFormat require_format(const std::filesystem::path& path, std::optional<MeshF
 Mesh read_mesh_from_memory(std::string_view bytes, MeshFormat format, const std::string& name,
                            const ReadOptions& options) {
   if (bytes.empty()) throw Error(fmt::format("{}: file is empty", name));
+  if (options.polygon_sizes) options.polygon_sizes->clear();
   Mesh mesh;
   switch (format) {
-    case MeshFormat::Obj: mesh = detail::read_obj(bytes, name); break;
-    case MeshFormat::Ply: mesh = detail::read_ply(bytes, name); break;
-    case MeshFormat::Off: mesh = detail::read_off(bytes, name); break;
+    case MeshFormat::Obj: mesh = detail::read_obj(bytes, name, options.polygon_sizes); break;
+    case MeshFormat::Ply: mesh = detail::read_ply(bytes, name, options.polygon_sizes); break;
+    case MeshFormat::Off: mesh = detail::read_off(bytes, name, options.polygon_sizes); break;
     case MeshFormat::Stl: mesh = detail::read_stl(bytes, name); break;
     case MeshFormat::Draco: mesh = detail::read_drc(bytes, name); break;
   }
   validate(mesh, name);
+  if (options.polygon_sizes && (format == MeshFormat::Stl || format == MeshFormat::Draco))
+    options.polygon_sizes->assign(static_cast<std::size_t>(mesh.num_faces()), 3);
   if (options.weld) weld_identical_vertices(mesh);
   return mesh;
 }

@@ -58,7 +58,7 @@ Corner parse_corner(TextCursor& c, Index np, Index nt, Index nn) {
 
 }  // namespace
 
-Mesh read_obj(std::string_view bytes, const std::string& name) {
+Mesh read_obj(std::string_view bytes, const std::string& name, std::vector<int>* polygon_sizes) {
   TextCursor c(bytes, name);
   std::vector<double> positions, uvs, normals;
   std::vector<float> colours;  // per position, filled only once a coloured "v" appears
@@ -111,6 +111,7 @@ Mesh read_obj(std::string_view bytes, const std::string& name) {
         any_n |= k.n >= 0;
         corners.push_back(k);
       }
+      if (polygon_sizes) polygon_sizes->push_back(static_cast<int>(polygon.size()));
       for (std::size_t k = 1; k + 1 < polygon.size(); ++k)
         triangles.push_back({base, base + static_cast<Index>(k), base + static_cast<Index>(k + 1)});
     }

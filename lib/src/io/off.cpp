@@ -39,7 +39,7 @@ bool read_colour(TextCursor& c, float rgba[4], int max_channels = 4) {
 
 }  // namespace
 
-Mesh read_off(std::string_view bytes, const std::string& name) {
+Mesh read_off(std::string_view bytes, const std::string& name, std::vector<int>* polygon_sizes) {
   TextCursor c(bytes, name);
   skip_space_and_comments(c);
   const char* at = c.pos();
@@ -108,6 +108,7 @@ Mesh read_off(std::string_view bytes, const std::string& name) {
       face_colours = true;
       face_rgba.assign(4 * tris.size() / 3, 1.0f);
     }
+    if (polygon_sizes) polygon_sizes->push_back(static_cast<int>(polygon.size()));
     triangulate_fan(polygon, polygon.size(), [&](long long i, long long j, long long k) {
       tris.insert(tris.end(), {Index(i), Index(j), Index(k)});
       if (face_colours) {

@@ -248,7 +248,7 @@ class BodyReader {
 
 }  // namespace
 
-Mesh read_ply(std::string_view bytes, const std::string& name) {
+Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>* polygon_sizes) {
   const Header h = parse_header(bytes, name);
   BodyReader in(bytes.substr(h.body_offset), h.encoding, name);
 
@@ -306,6 +306,7 @@ Mesh read_ply(std::string_view bytes, const std::string& name) {
               if (idx < 0 || idx >= vertex_count)
                 in.fail(fmt::format("vertex index {} out of range (the file has {} vertices)", idx,
                                     vertex_count));
+            if (polygon_sizes) polygon_sizes->push_back(static_cast<int>(polygon.size()));
             triangulate_fan(polygon, polygon.size(), [&](long long i, long long j, long long k) {
               tris.insert(tris.end(), {Index(i), Index(j), Index(k)});
             });
@@ -320,7 +321,10 @@ Mesh read_ply(std::string_view bytes, const std::string& name) {
               for (std::size_t i = start; i + 2 < k; ++i) {
                 Index t0 = Index(polygon[i]), t1 = Index(polygon[i + 1]), t2 = Index(polygon[i + 2]);
                 if ((i - start) % 2) std::swap(t0, t1);
-                if (t0 != t1 && t1 != t2 && t0 != t2) tris.insert(tris.end(), {t0, t1, t2});
+                if (t0 != t1 && t1 != t2 && t0 != t2) {
+                  tris.insert(tris.end(), {t0, t1, t2});
+                  if (polygon_sizes) polygon_sizes->push_back(3);
+                }
               }
               start = k + 1;
             }
