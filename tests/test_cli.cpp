@@ -242,5 +242,85 @@ TEST(CliPm, BadStreamsAndOptionsFailClearly) {
   EXPECT_FALSE(std::filesystem::exists(dir / "d.pm"));
 }
 
+
+TEST(CliTerrain, StreamedAndInMemoryOutputsEndToEnd) {
+  test::ScratchDir dir("cli-terrain");
+  CliRun r = run(dir, "terrain -o m.ply --levels 6 --colour --seed 3");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("16,384 faces"), std::string::npos) << r.err;
+  const Mesh ply = read_mesh(dir / "m.ply");
+  EXPECT_EQ(ply.num_faces(), 4 * 4096);
+  EXPECT_TRUE(ply.has_face_colours());
+  // The same terrain through the in-memory path (OBJ), up to the PLY's float32 positions.
+  ASSERT_EQ(run(dir, "terrain -o m.obj --levels 6 --colour --seed 3").status, 0);
+  const Mesh obj = read_mesh(dir / "m.obj");
+  EXPECT_EQ(obj.triangles, ply.triangles);
+  EXPECT_LT((obj.positions - ply.positions).cwiseAbs().maxCoeff(), 1e-6);
+  // A closed base from a file stays closed; stdout works.
+  ASSERT_EQ(run(dir, "generate icosphere -o ico.ply --subdivisions 1").status, 0);
+  ASSERT_EQ(run(dir, "terrain --base ico.ply -o planet.off --levels 3 --sigma 2% --edge-direction normals").status, 0);
+  EXPECT_TRUE(inspect(read_mesh(dir / "planet.off")).closed);
+  r = run(dir, "terrain -o - --format obj --levels 2 --base grid");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(read_mesh_from_memory(r.out, MeshFormat::Obj, "stdout").num_faces(), 32);
+  for (const char* help : {"terrain --help", "subdivide --help"}) {
+    r = run(dir, help);
+    EXPECT_EQ(r.status, 0);
+    EXPECT_NE(r.out.find("Examples:"), std::string::npos) << help;
+  }
+}
+
+TEST(CliTerrain, BadOptionsAndBasesFailClearly) {
+  test::ScratchDir dir("cli-terrain");
+  CliRun r = run(dir, "terrain -o t.ply --sigma lots");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("--sigma"), std::string::npos) << r.err;
+  EXPECT_EQ(run(dir, "terrain -o t.ply --levels 16").status, 2);
+  r = run(dir, "terrain -o t.ply --roughness 2");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("roughness"), std::string::npos);
+  r = run(dir, "terrain -o t.ply --base missing.obj");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("missing.obj"), std::string::npos);
+  test::write_text(dir / "bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 nan\nf 1 2 3\n");
+  r = run(dir, "terrain -o t.ply --base bad.obj");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("bad.obj"), std::string::npos);
+  ASSERT_EQ(run(dir, "generate icosphere -o ico.ply --subdivisions 1").status, 0);
+  const std::string before = test::read_bytes(dir / "ico.ply");
+  EXPECT_EQ(run(dir, "terrain --base ico.ply -o ico.ply").status, 1);
+  EXPECT_EQ(test::read_bytes(dir / "ico.ply"), before) << "the base is never overwritten";
+  r = run(dir, "terrain -o t.ply --levels 15 --base grid");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("2^31"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "t.ply"));
+}
+
+TEST(CliSubdivide, SchemesLevelsAndToleranceEndToEnd) {
+  test::ScratchDir dir("cli-subdivide");
+  test::write_text(dir / "cube.obj",
+                   "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+                   "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n");
+  CliRun r = run(dir, "subdivide cube.obj -o cc.ply --scheme catmull-clark --levels 2 --limit");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Mesh cc = read_mesh(dir / "cc.ply");
+  EXPECT_EQ(cc.num_faces(), 6 * 16 * 2) << "quads were recovered from the OBJ";
+  EXPECT_TRUE(inspect(cc).closed);
+  r = run(dir, "subdivide cube.obj -o loop.ply --scheme loop --tolerance 1%");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("surface moves"), std::string::npos) << r.err;
+  // Bad input: truncated file, unknown scheme, overwriting the input, a tolerance that is no number.
+  test::write_text(dir / "cut.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\n");
+  r = run(dir, "subdivide cut.obj -o x.ply");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("cut.obj"), std::string::npos) << r.err;
+  EXPECT_EQ(run(dir, "subdivide cube.obj -o x.ply --scheme butterfly").status, 2);
+  EXPECT_EQ(run(dir, "subdivide cube.obj -o cube.obj").status, 1);
+  r = run(dir, "subdivide cube.obj -o x.ply --tolerance small");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("--tolerance"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
+}
+
 }  // namespace
 }  // namespace lodkit

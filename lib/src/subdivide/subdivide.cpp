@@ -20,15 +20,15 @@ namespace {
 namespace Far = OpenSubdiv::Far;
 namespace Sdc = OpenSubdiv::Sdc;
 
-/// A primvar as Far::PrimvarRefiner wants it: Clear() and AddWithWeight(). Weights are float in
-/// OpenSubdiv; values accumulate in T.
+/// A primvar as Far::PrimvarRefinerReal wants it: Clear() and AddWithWeight(). Weights are double
+/// (PrimvarRefinerReal<double>): float weights would cost 1e-8 of relative precision per level.
 template <int N, typename T>
 struct Primvar {
   T v[N];
   void Clear(void* = nullptr) {
     for (T& x : v) x = 0;
   }
-  void AddWithWeight(const Primvar& src, float weight) {
+  void AddWithWeight(const Primvar& src, double weight) {
     for (int k = 0; k < N; ++k) v[k] += static_cast<T>(weight) * src.v[k];
   }
 };
@@ -168,7 +168,7 @@ Mesh subdivide_levels(const Mesh& mesh, const Faces& faces, const SubdivideOptio
   for (std::size_t v = 0; v < uv_values.size(); ++v)
     for (int k = 0; k < 2; ++k) uv_values[v].v[k] = mesh.attributes.uvs(static_cast<Index>(v), k);
 
-  const Far::PrimvarRefiner primvars(*refiner);
+  const Far::PrimvarRefinerReal<double> primvars(*refiner);
   for (int level = 1; level <= levels; ++level) {
     const Far::TopologyLevel& child = refiner->GetLevel(level);
     std::vector<Point> next_points(static_cast<std::size_t>(child.GetNumVertices()));
