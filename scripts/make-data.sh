@@ -9,3 +9,4 @@ $lodkit -q generate sphere -o data/sphere_uv.obj --tolerance 0.01 --uvs --normal
 $lodkit -q generate box -o data/box.off --size 2 1 0.5 --divisions 4
 $lodkit -q generate pyramid -o data/pyramid.ply
 $lodkit -q generate grid -o data/grid.ply --size 2 --divisions 16 --uvs
+$lodkit -q terrain -o data/terrain.ply --levels 6 --colour --seed 1
