@@ -205,22 +205,30 @@ TerrainWriteStats write_terrain_ply(const Mesh& base, const TerrainOptions& opti
           });
         }
       });
+      const std::size_t face_bytes = 13 + (engine.coloured() ? 3 : 0);
       write_blocks_in_order(out, engine.num_coarse_faces(), std::max<std::int64_t>(1, 65536 / per_face),
                             [&](std::int64_t first, std::int64_t last, std::string& bytes) {
         std::vector<std::int64_t>& indices = workspaces.local().indices;
+        bytes.resize(static_cast<std::size_t>((last - first) * per_face) * face_bytes);
+        char* cursor = bytes.data();
+        auto put_index = [&](std::int64_t v) {
+          const auto i = static_cast<std::int32_t>(v);
+          std::memcpy(cursor, &i, 4);
+          cursor += 4;
+        };
         for (std::int64_t f = first; f < last; ++f) {
           engine.lattice_vertex_indices(static_cast<Index>(f), indices);
           std::int64_t face = f * per_face;
           engine.for_each_lattice_triangle([&](int i0, int j0, int i1, int j1, int i2, int j2) {
-            bytes.push_back(3);
-            append_le(bytes, static_cast<std::int32_t>(indices[engine.lattice_index(i0, j0)]));
-            append_le(bytes, static_cast<std::int32_t>(indices[engine.lattice_index(i1, j1)]));
-            append_le(bytes, static_cast<std::int32_t>(indices[engine.lattice_index(i2, j2)]));
+            *cursor++ = 3;
+            put_index(indices[engine.lattice_index(i0, j0)]);
+            put_index(indices[engine.lattice_index(i1, j1)]);
+            put_index(indices[engine.lattice_index(i2, j2)]);
             if (engine.coloured()) {
               const detail::Rgb rgb = palette[face_colour[static_cast<std::size_t>(face++)]];
-              bytes.push_back(static_cast<char>(rgb.r));
-              bytes.push_back(static_cast<char>(rgb.g));
-              bytes.push_back(static_cast<char>(rgb.b));
+              *cursor++ = static_cast<char>(rgb.r);
+              *cursor++ = static_cast<char>(rgb.g);
+              *cursor++ = static_cast<char>(rgb.b);
             }
           });
         }
