@@ -3,8 +3,10 @@
 
     /usr/bin/python3 bench/plot_simplify.py docs/benchmarks/schroeder.csv docs/benchmarks/schroeder
 
-writes <prefix>_error_vs_faces.{png,svg} and <prefix>_error_vs_time.{png,svg} (matplotlib, from
-Debian's python3-matplotlib). One panel per mesh; log scales since the data spans decades.
+writes <prefix>_error_vs_faces.{png,svg}, <prefix>_error_vs_time.{png,svg} (the Pareto view) and
+<prefix>_validity_vs_reduction.{png,svg} (components, Euler characteristic and invalid elements --
+non-manifold edges plus flipped faces -- against the fraction of faces kept), with matplotlib from
+Debian's python3-matplotlib. One panel per mesh; log scales where the data spans decades.
 """
 import csv
 import sys
@@ -47,6 +49,47 @@ def main() -> None:
         for ext in ("png", "svg"):
             fig.savefig(f"{prefix}_{name}.{ext}", dpi=110)
         plt.close(fig)
+
+    plot_validity(rows, meshes, methods, markers, prefix)
+
+
+def plot_validity(rows, meshes, methods, markers, prefix) -> None:
+    """Where methods fail: a valid simplification keeps the input's components and Euler
+    characteristic and has no non-manifold edges or flipped faces."""
+    panels = (("components", "components"), ("euler", "Euler characteristic"),
+              ("invalid", "non-manifold edges + flipped faces"))
+    fig, axes = plt.subplots(len(panels), len(meshes), figsize=(4.2 * len(meshes), 3.2 * len(panels)),
+                             squeeze=False)
+    for col, mesh in enumerate(meshes):
+        for row, (key, label) in enumerate(panels):
+            ax = axes[row][col]
+            for method in methods:
+                points = []
+                for r in rows:
+                    if r["mesh"] != mesh or r["method"] != method:
+                        continue
+                    kept = float(r["faces_out"]) / float(r["faces_in"])
+                    value = (int(r["non_manifold_edges"]) + int(r["flipped"]) if key == "invalid"
+                             else int(r[key]))
+                    points.append((kept, value))
+                points.sort()
+                if points:
+                    ax.plot([p[0] for p in points], [p[1] for p in points], marker=markers[method],
+                            label=method)
+            ax.set_xscale("log")
+            ax.invert_xaxis()  # reduction grows to the right
+            if key != "euler":
+                ax.set_yscale("symlog", linthresh=1)
+            ax.set_xlabel("fraction of faces kept")
+            ax.set_ylabel(label)
+            if row == 0:
+                ax.set_title(mesh, fontsize=9)
+            ax.grid(True, which="both", alpha=0.3)
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    for ext in ("png", "svg"):
+        fig.savefig(f"{prefix}_validity_vs_reduction.{ext}", dpi=110)
+    plt.close(fig)
 
 
 if __name__ == "__main__":
