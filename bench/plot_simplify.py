@@ -80,6 +80,7 @@ def plot_validity(rows, meshes, methods, markers, prefix) -> None:
             ax.invert_xaxis()  # reduction grows to the right
             if key != "euler":
                 ax.set_yscale("symlog", linthresh=1)
+                ax.set_ylim(bottom=0)
             ax.set_xlabel("fraction of faces kept")
             ax.set_ylabel(label)
             if row == 0:
