@@ -2,7 +2,9 @@
 
 #include <lodkit/error.h>
 
+#include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <filesystem>
 #include <fmt/format.h>
 #include <iostream>
@@ -52,6 +54,23 @@ void write_output(const Mesh& mesh, const std::string& path, const std::optional
   WriteOptions with_format = options;
   if (format) with_format.format = stream_format(format, path.c_str());
   write_mesh(mesh, path, with_format);
+}
+
+LengthArgument parse_length(const std::string& text, const std::string& option) {
+  LengthArgument length;
+  std::string number = text;
+  length.relative = !number.empty() && number.back() == '%';
+  if (length.relative) number.pop_back();
+  std::size_t used = 0;
+  try {
+    length.value = std::stod(number, &used);
+  } catch (const std::logic_error&) {
+    used = 0;
+  }
+  if (used == 0 || used != number.size() || !(length.value >= 0) || !std::isfinite(length.value))
+    throw Error(fmt::format("{} '{}' is not a non-negative number or a percentage", option, text));
+  if (length.relative) length.value /= 100.0;
+  return length;
 }
 
 std::string thousands(long long n) {

@@ -48,6 +48,15 @@ void write_output(const Mesh& mesh, const std::string& path, const std::optional
 /// "12,345"
 std::string thousands(long long n);
 
+/// A non-negative length given on the command line: "0.5" is absolute, "0.5%" a percentage (of a
+/// diagonal, say); `value` is then the fraction (0.005).
+struct LengthArgument {
+  double value = 0.0;
+  bool relative = false;
+};
+/// \throw Error "<option> '<text>' is not a non-negative number or a percentage".
+LengthArgument parse_length(const std::string& text, const std::string& option);
+
 nlohmann::json to_json(const MeshReport& report);
 
 /// CLI11 validator for names of mesh formats.

@@ -32,18 +32,8 @@ struct SimplifyCliOptions {
 
 // "0.5" is absolute; "0.5%" is a percentage of the bounding-box diagonal.
 double parse_error(const std::string& text, double diagonal) {
-  std::string s = text;
-  const bool percent = !s.empty() && s.back() == '%';
-  if (percent) s.pop_back();
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(s, &used);
-  } catch (...) {
-    used = 0;
-  }
-  if (used != s.size() || !(v >= 0)) throw Error(fmt::format("simplify: --max-error '{}' is not a distance or a percentage", text));
-  return percent ? v / 100.0 * diagonal : v;
+  const LengthArgument error = parse_length(text, "simplify: --max-error");
+  return error.relative ? error.value * diagonal : error.value;
 }
 
 int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {

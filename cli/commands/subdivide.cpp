@@ -66,16 +66,9 @@ Catmull-Clark output quads are split along their shorter diagonal (lodkit meshes
             const std::vector<std::string> uv_names{"smooth", "corners", "corners1", "corners2", "boundaries", "all"};
             s.uv_rule = static_cast<UvRule>(std::find(uv_names.begin(), uv_names.end(), o.uv_rule) - uv_names.begin());
             if (o.tolerance) {
-              std::string text = *o.tolerance;
-              s.tolerance_is_relative = !text.empty() && text.back() == '%';
-              if (s.tolerance_is_relative) text.pop_back();
-              try {
-                std::size_t used = 0;
-                s.tolerance = std::stod(text, &used) / (s.tolerance_is_relative ? 100.0 : 1.0);
-                if (used != text.size()) throw std::invalid_argument(text);
-              } catch (const std::logic_error&) {
-                throw Error(fmt::format("subdivide: --tolerance must be a number or percentage, not '{}'", *o.tolerance));
-              }
+              const LengthArgument tolerance = parse_length(*o.tolerance, "subdivide: --tolerance");
+              s.tolerance = tolerance.value;
+              s.tolerance_is_relative = tolerance.relative;
             }
             refuse_to_overwrite(o.output, o.input);
             std::vector<int> polygon_sizes;

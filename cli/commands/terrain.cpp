@@ -4,7 +4,6 @@
 #include <lodkit/error.h>
 #include <lodkit/terrain.h>
 
-#include <charconv>
 #include <chrono>
 #include <fmt/format.h>
 #include <memory>
@@ -19,18 +18,6 @@ struct TerrainCommandOptions {
   std::optional<std::string> format, base_format;
   TerrainOptions terrain;
 };
-
-/// "0.05" is absolute; "5%" is 5 % of the base's bounding-box diagonal.
-void parse_sigma(const std::string& text, TerrainOptions& o) {
-  const bool relative = !text.empty() && text.back() == '%';
-  const std::string number = relative ? text.substr(0, text.size() - 1) : text;
-  double value = 0;
-  const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), value);
-  if (ec != std::errc() || end != number.data() + number.size() || !std::isfinite(value) || value < 0)
-    throw Error(fmt::format("terrain: --sigma must be a non-negative number or percentage, not '{}'", text));
-  o.sigma = relative ? value / 100.0 : value;
-  o.sigma_is_relative = relative;
-}
 
 Mesh load_base(const TerrainCommandOptions& o) {
   if (o.base == "grid") return make_terrain_base(TerrainBase::Grid);
@@ -87,7 +74,9 @@ terrain's points bit for bit. PLY output is streamed (float32 positions, per-fac
   return {sub, [opt, &global] {
             const auto start = std::chrono::steady_clock::now();
             TerrainCommandOptions& o = *opt;
-            parse_sigma(o.sigma, o.terrain);
+            const LengthArgument sigma = parse_length(o.sigma, "terrain: --sigma");  // "5%": of the base's diagonal
+            o.terrain.sigma = sigma.value;
+            o.terrain.sigma_is_relative = sigma.relative;
             o.terrain.edge_direction = o.edge_direction == "up"        ? EdgeDirection::Up
                                        : o.edge_direction == "normals" ? EdgeDirection::FaceNormals
                                                                        : EdgeDirection::Auto;
