@@ -11,7 +11,6 @@
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
 #include <memory>
-#include <numeric>
 #include <unordered_map>
 
 namespace lodkit {

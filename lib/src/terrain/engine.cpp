@@ -39,12 +39,10 @@ const std::array<Rgb, 6>& terrain_palette() {
 Mesh prepare_terrain_base(const Mesh& base) {
   validate(base, "terrain base");
   if (base.num_faces() == 0) throw Error("terrain base: has no faces");
-  Mesh welded;
+  Mesh welded;  // positions and faces only, so welding identical vertices welds by position
   welded.positions = base.positions;
   welded.triangles = base.triangles;
-  const Eigen::VectorX<Index> cls = position_classes(welded);
-  for (Index f = 0; f < welded.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) welded.triangles(f, k) = cls[welded.triangles(f, k)];
+  weld_identical_vertices(welded);
   for (Index f = 0; f < welded.num_faces(); ++f) {
     const auto t = welded.triangles.row(f);
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
@@ -52,6 +50,18 @@ Mesh prepare_terrain_base(const Mesh& base) {
   }
   remove_unreferenced_vertices(welded);
   return welded;
+}
+
+TerrainSize prepared_terrain_size(const Mesh& base, int levels) {
+  std::vector<std::array<Index, 3>> faces(static_cast<std::size_t>(base.num_faces()));
+  for (Index f = 0; f < base.num_faces(); ++f)
+    faces[f] = {base.triangles(f, 0), base.triangles(f, 1), base.triangles(f, 2)};
+  const auto edges = static_cast<std::int64_t>(classify_edges(faces).size());
+  const std::int64_t n = std::int64_t{1} << levels;
+  TerrainSize size;
+  size.faces = base.num_faces() * n * n;
+  size.vertices = base.num_vertices() + edges * (n - 1) + base.num_faces() * (n - 1) * (n - 2) / 2;
+  return size;
 }
 
 TerrainEngine::TerrainEngine(const Mesh& raw_base, const TerrainOptions& options) : options_(options) {
@@ -67,17 +77,15 @@ TerrainEngine::TerrainEngine(const Mesh& raw_base, const TerrainOptions& options
   levels_ = options.levels;
   colour_ = options.colour;
 
-  const TerrainSize size = terrain_size(base, levels_);
+  const TerrainSize size = prepared_terrain_size(base, levels_);
   if (size.vertices > std::numeric_limits<Index>::max() || size.faces > std::numeric_limits<Index>::max())
     throw Error(fmt::format("terrain: {} levels of a {}-face base make {} faces, above the 2^31 - 1 limit",
                             levels_, base.num_faces(), size.faces));
   num_vertices_ = size.vertices;
   num_faces_ = size.faces;
 
-  const double diagonal = bounding_box(base).diagonal().norm();
-  const double sigma0 = options.sigma_is_relative ? options.sigma * diagonal : options.sigma;
   sigma_.assign(static_cast<std::size_t>(levels_) + 1, 0.0);
-  for (int l = 1; l <= levels_; ++l) sigma_[static_cast<std::size_t>(l)] = sigma0 * std::exp2(-l * options.roughness);
+  for (int l = 1; l <= levels_; ++l) sigma_[static_cast<std::size_t>(l)] = terrain_sigma(base, options, l);
 
   // Patches below the coarse level; the palette needs every point it colours in the coarse level.
   const int palette_levels = colour_ ? std::min(options.palette_level, levels_) : 0;
@@ -159,25 +167,43 @@ void TerrainEngine::build_coarse_levels(const Mesh& base) {
   std::vector<int> face_dir(static_cast<std::size_t>(nf));
   for (Index f = 0; f < nf; ++f) face_dir[f] = f;
 
-  // Levels 1..k through the refiner's parent-child relations. Parents kept for colouring.
-  std::vector<std::vector<std::array<Index, 2>>> parents_by_level{
-      std::vector<std::array<Index, 2>>(points.size(), {-1, -1})};
-  std::vector<std::vector<TerrainPoint>> points_by_level{points};
+  // With colour, the points of the palette level (every point of level <= it) take palette colours by
+  // height as soon as that level exists; deeper midpoints inherit theirs in midpoint(). The coarse
+  // level is at least the palette level, so this happens here.
+  const int palette_level = std::min(options_.palette_level, levels_);
+  auto colour_by_height = [&](std::vector<TerrainPoint>& level_points) {
+    auto height = [&](const Eigen::Vector3d& p) {
+      return closed_base_ ? (p - centroid).norm() : (p - centroid).dot(up);
+    };
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const TerrainPoint& p : level_points) {
+      lo = std::min(lo, height(p.position));
+      hi = std::max(hi, height(p.position));
+    }
+    // Thresholds between water | sand | grass | forest | rock | snow, as fractions of the range.
+    constexpr std::array<double, 5> kThresholds{0.22, 0.27, 0.50, 0.68, 0.84};
+    for (TerrainPoint& p : level_points) {
+      const double t = hi > lo ? (height(p.position) - lo) / (hi - lo) : 0.5;
+      std::uint8_t c = 0;
+      while (c < kThresholds.size() && t > kThresholds[c]) ++c;
+      p.colour = c;
+    }
+  };
+  if (colour_ && palette_level == 0) colour_by_height(points);
+
+  // Levels 1..k through the refiner's parent-child relations.
   for (int l = 0; l < coarse_level_; ++l) {
     const Far::TopologyLevel& parent = refiner->GetLevel(l);
     const Far::TopologyLevel& child = refiner->GetLevel(l + 1);
     std::vector<TerrainPoint> next(static_cast<std::size_t>(child.GetNumVertices()));
-    std::vector<std::array<Index, 2>> next_parents(next.size(), {-1, -1});
     for (Index v = 0; v < parent.GetNumVertices(); ++v) {
       const Index c = parent.GetVertexChildVertex(v);
       next[c] = points[v];
-      next_parents[c] = {v, -1};  // the same point: "parent" is itself one level up
     }
     for (Index e = 0; e < parent.GetNumEdges(); ++e) {
       const auto ev = parent.GetEdgeVertices(e);
       const Index c = parent.GetEdgeChildVertex(e);
       next[c] = midpoint(points[ev[0]], points[ev[1]], edge_dir[e], l + 1);
-      next_parents[c] = {ev[0], ev[1]};
     }
     std::vector<int> next_edge_dir(static_cast<std::size_t>(child.GetNumEdges()), -1);
     std::vector<int> next_face_dir(static_cast<std::size_t>(child.GetNumFaces()), -1);
@@ -190,8 +216,7 @@ void TerrainEngine::build_coarse_levels(const Mesh& base) {
     points = std::move(next);
     edge_dir = std::move(next_edge_dir);
     face_dir = std::move(next_face_dir);
-    points_by_level.push_back(points);
-    parents_by_level.push_back(std::move(next_parents));
+    if (colour_ && l + 1 == palette_level) colour_by_height(points);
   }
 
   const Far::TopologyLevel& last = refiner->GetLevel(coarse_level_);
@@ -207,47 +232,6 @@ void TerrainEngine::build_coarse_levels(const Mesh& base) {
     faces_[f] = {{fv[0], fv[1], fv[2]}, {fe[0], fe[1], fe[2]}, face_dir[f]};
   }
   points_ = std::move(points);
-
-  if (!colour_) return;
-  // Palette by height over the points of level <= palette level, then inheritance level by level.
-  const int palette_level = std::min(options_.palette_level, levels_);
-  auto height = [&](const Eigen::Vector3d& p) {
-    return closed_base_ ? (p - centroid).norm() : (p - centroid).dot(up);
-  };
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (const TerrainPoint& p : points_)
-    if (p.level <= palette_level) {
-      lo = std::min(lo, height(p.position));
-      hi = std::max(hi, height(p.position));
-    }
-  const auto& palette = terrain_palette();
-  // Thresholds between water | sand | grass | forest | rock | snow, as fractions of the range.
-  constexpr std::array<double, 5> kThresholds{0.22, 0.27, 0.50, 0.68, 0.84};
-  auto palette_index = [&](const Eigen::Vector3d& p) {
-    const double t = hi > lo ? (height(p) - lo) / (hi - lo) : 0.5;
-    std::uint8_t c = 0;
-    while (c < kThresholds.size() && t > kThresholds[c]) ++c;
-    return std::min<std::uint8_t>(c, static_cast<std::uint8_t>(palette.size() - 1));
-  };
-  for (std::size_t l = 0; l < points_by_level.size(); ++l) {
-    std::vector<TerrainPoint>& level_points = points_by_level[l];
-    for (std::size_t v = 0; v < level_points.size(); ++v) {
-      TerrainPoint& p = level_points[v];
-      const auto& par = parents_by_level[l][v];
-      if (p.level <= palette_level) {
-        p.colour = palette_index(p.position);
-      } else if (par[1] < 0) {
-        p.colour = points_by_level[l - 1][static_cast<std::size_t>(par[0])].colour;
-      } else {
-        const TerrainPoint& a = points_by_level[l - 1][static_cast<std::size_t>(par[0])];
-        const TerrainPoint& b = points_by_level[l - 1][static_cast<std::size_t>(par[1])];
-        const TerrainPoint& low = a.key < b.key ? a : b;
-        const TerrainPoint& high = a.key < b.key ? b : a;
-        p.colour = keyed_coin(p.key, options_.seed) ? low.colour : high.colour;
-      }
-    }
-  }
-  for (std::size_t v = 0; v < points_.size(); ++v) points_[v].colour = points_by_level.back()[v].colour;
 }
 
 void TerrainEngine::refine_edge(Index e, std::vector<TerrainPoint>& out) const {
@@ -273,11 +257,8 @@ void TerrainEngine::refine_face(Index f, std::vector<TerrainPoint>& lattice,
     refine_edge(face.e[k], scratch);
     const bool forward = edges_[static_cast<std::size_t>(face.e[k])].v[0] == face.v[k];
     for (int t = 0; t <= n_; ++t) {
-      const TerrainPoint& p = scratch[static_cast<std::size_t>(forward ? t : n_ - t)];
-      // Side k runs from corner k to corner k + 1: (t, 0), (n - t, t), (0, n - t).
-      const int i = k == 0 ? t : k == 1 ? n_ - t : 0;
-      const int j = k == 0 ? 0 : k == 1 ? t : n_ - t;
-      lattice[lattice_index(i, j)] = p;
+      const auto [i, j] = side_point(k, t);
+      lattice[lattice_index(i, j)] = scratch[static_cast<std::size_t>(forward ? t : n_ - t)];
     }
   }
   int level = coarse_level_;
@@ -304,8 +285,7 @@ void TerrainEngine::lattice_vertex_indices(Index f, std::vector<std::int64_t>& o
     const bool forward = edge.v[0] == face.v[k];
     const std::int64_t first = first_edge_point() + static_cast<std::int64_t>(face.e[k]) * (n_ - 1);
     for (int t = 0; t <= n_; ++t) {
-      const int i = k == 0 ? t : k == 1 ? n_ - t : 0;
-      const int j = k == 0 ? 0 : k == 1 ? t : n_ - t;
+      const auto [i, j] = side_point(k, t);
       std::int64_t g;
       if (t == 0) g = face.v[k];
       else if (t == n_) g = face.v[(k + 1) % 3];

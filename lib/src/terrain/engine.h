@@ -12,6 +12,7 @@
 #include <lodkit/terrain.h>
 
 #include <array>
+#include <utility>
 #include <cstdint>
 #include <vector>
 
@@ -77,6 +78,13 @@ class TerrainEngine {
   static std::uint8_t face_colour(const TerrainPoint& a, const TerrainPoint& b, const TerrainPoint& c);
 
  private:
+  /// Lattice (i, j) of point t = 0..n along side k of a patch: side k runs from corner k to corner
+  /// k + 1, so the sides are (t, 0), (n - t, t) and (0, n - t).
+  std::pair<int, int> side_point(int k, int t) const {
+    if (k == 0) return {t, 0};
+    if (k == 1) return {n_ - t, t};
+    return {0, n_ - t};
+  }
   TerrainPoint midpoint(const TerrainPoint& a, const TerrainPoint& b, int direction, int level) const;
   void build_coarse_levels(const Mesh& base);
 
@@ -103,5 +111,7 @@ class TerrainEngine {
 
 /// Welded, compacted triangle base with its attributes dropped. \throw Error if unusable.
 Mesh prepare_terrain_base(const Mesh& base);
+/// terrain_size() of a base prepare_terrain_base() has already prepared.
+TerrainSize prepared_terrain_size(const Mesh& base, int levels);
 
 }  // namespace lodkit::detail

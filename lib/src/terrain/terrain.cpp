@@ -1,7 +1,6 @@
 // Public terrain API: the base shapes, sizes, and the two sinks over TerrainEngine: a Mesh in memory,
 // and a PLY file written in order while patches are generated in parallel.
 #include <lodkit/error.h>
-#include <lodkit/primitives.h>
 #include <lodkit/terrain.h>
 
 #include <fmt/format.h>
@@ -12,9 +11,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
-#include <set>
 
-#include "core/topology.h"
 #include "io/output.h"
 #include "terrain/engine.h"
 
@@ -91,18 +88,9 @@ double terrain_sigma(const Mesh& base, const TerrainOptions& options, int level)
   return sigma0 * std::exp2(-level * options.roughness);
 }
 
-TerrainSize terrain_size(const Mesh& raw_base, int levels) {
+TerrainSize terrain_size(const Mesh& base, int levels) {
   if (levels < 0 || levels > 15) throw Error(fmt::format("terrain: levels must be 0..15, not {}", levels));
-  const Mesh base = detail::prepare_terrain_base(raw_base);
-  std::vector<std::array<Index, 3>> faces(static_cast<std::size_t>(base.num_faces()));
-  for (Index f = 0; f < base.num_faces(); ++f)
-    faces[f] = {base.triangles(f, 0), base.triangles(f, 1), base.triangles(f, 2)};
-  const auto edges = static_cast<std::int64_t>(detail::classify_edges(faces).size());
-  const std::int64_t n = std::int64_t{1} << levels;
-  TerrainSize size;
-  size.faces = base.num_faces() * n * n;
-  size.vertices = base.num_vertices() + edges * (n - 1) + base.num_faces() * (n - 1) * (n - 2) / 2;
-  return size;
+  return detail::prepared_terrain_size(detail::prepare_terrain_base(base), levels);
 }
 
 Terrain generate_terrain(const Mesh& base, const TerrainOptions& options) {
