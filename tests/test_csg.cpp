@@ -1,5 +1,6 @@
 // CSG: volumes obey inclusion-exclusion, results are closed outward manifolds, degenerate cases are
 // right, bad inputs are refused with the reason, trees parse with clear errors.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <lodkit/csg.h>
 #include <lodkit/error.h>
@@ -180,6 +181,31 @@ TEST(CsgTree, BadNodesAreNamedByTheirJsonPath) {
   EXPECT_NE(error_of(R"({"primitive": "box", "transform": {"scale": 0}})").find("must not be zero"), std::string::npos);
   EXPECT_NE(error_of("{not json").find("model.json: not valid JSON"), std::string::npos);
   EXPECT_THROW(evaluate(parse_csg(R"({"primitive": "sphere", "radius": -1})", "s.json", ".")), Error);
+}
+
+TEST(CsgTree, ManyPartUnionsAreExactWhetherPartsOverlapTouchOrStandApart) {
+  // Five unit cubes along x at a spacing s: overlapping (s < 1) they fuse into one box of length
+  // 4s + 1; touching (s = 1) they fuse too; apart (s > 1) the union keeps five shells. The parts are
+  // reduced in parallel, so the same tree is also evaluated twice to check the result repeats.
+  auto row_of_cubes = [](double spacing) {
+    std::string children;
+    for (int i = 0; i < 5; ++i)
+      children += fmt::format(R"({}{{"primitive": "box", "transform": {{"translate": [{}, 0, 0]}}}})", i ? ", " : "", i * spacing);
+    return parse_csg(fmt::format(R"({{"op": "union", "children": [{}]}})", children), "row.json", ".");
+  };
+  for (const double spacing : {0.5, 0.75, 1.0, 1.5}) {
+    SCOPED_TRACE(spacing);
+    const CsgNode tree = row_of_cubes(spacing);
+    const CsgResult r = evaluate(tree);
+    expect_solid(r.mesh);
+    const bool apart = spacing > 1.0;
+    EXPECT_NEAR(r.volume, apart ? 5.0 : 4 * spacing + 1, 1e-9);
+    EXPECT_EQ(inspect(r.mesh).components, apart ? 5 : 1);
+    EXPECT_EQ(r.operations, apart ? 0 : 4);  // apart: one bounding-box test, no boolean at all
+    const CsgResult again = evaluate(tree);
+    EXPECT_EQ(again.mesh.positions, r.mesh.positions);
+    EXPECT_EQ(again.mesh.triangles, r.mesh.triangles);
+  }
 }
 
 }  // namespace

@@ -94,7 +94,7 @@ void check_operand(SM& sm, const Mesh& source, const std::string& name, std::vec
   if (!CGAL::is_valid_polygon_mesh(sm)) throw Error(fmt::format("{}: is not a valid 2-manifold mesh", name));
   if (!CGAL::is_closed(sm)) throw Error(fmt::format("{}: is not closed (it has boundary edges)", name));
   std::vector<std::pair<typename SM::Face_index, typename SM::Face_index>> pairs;
-  PMP::self_intersections(sm, std::back_inserter(pairs));
+  PMP::self_intersections<CGAL::Parallel_if_available_tag>(sm, std::back_inserter(pairs));
   if (!pairs.empty()) throw Error(fmt::format("{}: intersects itself ({} face pairs)", name, pairs.size()));
   if (!PMP::does_bound_a_volume(sm)) throw Error(fmt::format("{}: does not bound a volume (inconsistent orientation or nested shells)", name));
   if (!PMP::is_outward_oriented(sm)) {
@@ -137,7 +137,7 @@ bool clean_and_check(SM& sm) {
     if (!PMP::remove_degenerate_faces(sm)) return false;
     sm.collect_garbage();
   }
-  return sm.number_of_faces() > 0 && CGAL::is_closed(sm) && !PMP::does_self_intersect(sm);
+  return sm.number_of_faces() > 0 && CGAL::is_closed(sm) && !PMP::does_self_intersect<CGAL::Parallel_if_available_tag>(sm);
 }
 
 // Exact results rounded to doubles: nearby points may merge or cross. Check, repair flat triangles,
@@ -172,7 +172,7 @@ bool are_separate_solids(const Mesh& mesh) {
   const Mesh w = welded(mesh);
   SM sm = to_surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel>(w, "parts", warnings);
   return warnings.empty() && sm.number_of_faces() == static_cast<std::size_t>(w.num_faces()) && CGAL::is_closed(sm) &&
-         !PMP::does_self_intersect(sm) && PMP::does_bound_a_volume(sm) && PMP::is_outward_oriented(sm);
+         !PMP::does_self_intersect<CGAL::Parallel_if_available_tag>(sm) && PMP::does_bound_a_volume(sm) && PMP::is_outward_oriented(sm);
 }
 
 std::string to_string(BooleanOp op) {

@@ -5,12 +5,16 @@
 #include <lodkit/primitives.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <fmt/format.h>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <mutex>
 #include <sstream>
+#include <tbb/parallel_for.h>
 
 namespace lodkit {
 namespace {
@@ -148,12 +152,28 @@ Mesh transformed(Mesh m, const Eigen::Matrix4d& t) {
   return m;
 }
 
+// True when no two parts' bounding boxes meet (touching counts as meeting).
+bool have_disjoint_boxes(const std::vector<Mesh>& parts) {
+  std::vector<Eigen::AlignedBox3d> boxes;
+  for (const Mesh& m : parts) boxes.push_back(bounding_box(m));
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    for (std::size_t j = i + 1; j < boxes.size(); ++j)
+      if (boxes[i].intersects(boxes[j])) return false;
+  return true;
+}
+
+// Evaluates a tree bottom-up. Siblings are independent, so children and each level of a pairwise
+// reduction run in parallel (CGAL's kernels are thread-safe on separate meshes).
 struct Evaluator {
+  explicit Evaluator(const CsgOptions& o) : options(o) {}
+
   const CsgOptions& options;
-  CsgResult& result;
+  std::atomic<int> primitives = 0, operations = 0;
+  std::mutex warnings_mutex;
+  std::vector<std::string> warnings;
 
   Mesh leaf(const CsgNode& n) {
-    ++result.primitives;
+    ++primitives;
     const double t = options.tolerance;
     try {
       if (n.kind == CsgNode::Kind::MeshFile) {
@@ -181,9 +201,12 @@ struct Evaluator {
   }
 
   Mesh combine(const Mesh& a, const Mesh& b, BooleanOp op, const std::string& na, const std::string& nb) {
-    ++result.operations;
+    ++operations;
     BooleanResult r = boolean(a, b, op, {.exact = options.exact, .check_operands = false}, na, nb);
-    for (auto& w : r.warnings) result.warnings.push_back(std::move(w));
+    if (!r.warnings.empty()) {
+      const std::lock_guard lock(warnings_mutex);
+      for (auto& w : r.warnings) warnings.push_back(std::move(w));
+    }
     return std::move(r.mesh);
   }
 
@@ -192,15 +215,19 @@ struct Evaluator {
   Mesh reduce(std::vector<Mesh> parts, BooleanOp op, const std::string& where) {
     if (op == BooleanOp::Union && parts.size() > 2) {
       // Many separate parts (holes to drill, say): their union is just all their shells, once one
-      // test shows that none touches or contains another.
+      // test shows that none touches or contains another. Every part is a valid solid already (a
+      // primitive, a checked file or a checked result), so pairwise disjoint bounding boxes settle
+      // it without testing a single triangle pair.
       Mesh all = parts[0];
       for (std::size_t i = 1; i < parts.size(); ++i) all = concatenated(all, parts[i]);
-      if (are_separate_solids(all)) return all;
+      if (have_disjoint_boxes(parts) || are_separate_solids(all)) return all;
     }
     while (parts.size() > 1) {
-      std::vector<Mesh> next;
-      for (std::size_t i = 0; i + 1 < parts.size(); i += 2) next.push_back(combine(parts[i], parts[i + 1], op, where, where));
-      if (parts.size() % 2) next.push_back(std::move(parts.back()));
+      std::vector<Mesh> next((parts.size() + 1) / 2);
+      tbb::parallel_for(std::size_t{0}, parts.size() / 2, [&](std::size_t i) {
+        next[i] = combine(parts[2 * i], parts[2 * i + 1], op, where, where);
+      });
+      if (parts.size() % 2) next.back() = std::move(parts.back());
       parts = std::move(next);
     }
     return std::move(parts.front());
@@ -208,8 +235,8 @@ struct Evaluator {
 
   Mesh node(const CsgNode& n) {
     if (n.kind != CsgNode::Kind::Operation) return transformed(leaf(n), n.transform);
-    std::vector<Mesh> parts;
-    for (const CsgNode& child : n.children) parts.push_back(node(child));
+    std::vector<Mesh> parts(n.children.size());
+    tbb::parallel_for(std::size_t{0}, n.children.size(), [&](std::size_t i) { parts[i] = node(n.children[i]); });
     Mesh out;
     if (n.op == BooleanOp::Difference && parts.size() > 1) {
       // A - B - C - ... = A - (B u C u ...)
@@ -248,8 +275,13 @@ CsgResult evaluate(const CsgNode& tree, const CsgOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   if (!(options.tolerance > 0)) throw Error(fmt::format("csg: tolerance must be positive, got {}", options.tolerance));
   CsgResult result;
-  Evaluator e{options, result};
+  Evaluator e{options};
   result.mesh = e.node(tree);
+  result.primitives = e.primitives;
+  result.operations = e.operations;
+  // Parallel siblings finish in any order; sorted, the warnings read the same on every run.
+  result.warnings = std::move(e.warnings);
+  std::sort(result.warnings.begin(), result.warnings.end());
   result.volume = signed_volume(result.mesh);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
