@@ -6,18 +6,14 @@
 //
 //   lodkit_bench_simplify [--targets 0.1,0.01] [--methods quadric,hoppe,...] [--csv FILE]
 //                         [--hoppe-max-faces N] MESH...
-#include <lodkit/decimate.h>
 #include <lodkit/inspect.h>
 #include <lodkit/io.h>
 #include <lodkit/metrics.h>
-#include <lodkit/simplify.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fmt/format.h>
-#include <lodkit/progressive.h>
 
 #include <fstream>
 #include <sstream>
@@ -27,7 +23,7 @@
 #include <unistd.h>
 #include <vector>
 
-#include "peers/peers.h"
+#include "methods.h"
 
 namespace fs = std::filesystem;
 using namespace lodkit;
@@ -41,33 +37,6 @@ struct Outcome {
   Mesh mesh;
 };
 
-bench::PeerRun run_method(const std::string& method, const Mesh& mesh, Index target) {
-  if (method == "meshopt") return bench::run_meshoptimizer(mesh, target, false);
-  if (method == "meshopt-sloppy") return bench::run_meshoptimizer(mesh, target, true);
-  if (method == "openmesh") return bench::run_openmesh(mesh, target);
-  if (method == "cgal") return bench::run_cgal(mesh, target);
-  if (method == "pm") {
-    // The progressive-mesh path: build the stream (quadric collapses), then extract the level with
-    // the target's face count. The time is both, the cost of one level from scratch; every further
-    // level of the same mesh costs only the extraction (see the progressive-mesh section).
-    const auto t0 = std::chrono::steady_clock::now();
-    const ProgressiveMesh pm = build_progressive_mesh(mesh);
-    ExtractedLevel level = extract_level(pm, level_for_faces(pm, target));
-    return {std::move(level.mesh), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()};
-  }
-  if (method == "schroeder") {
-    const auto t0 = std::chrono::steady_clock::now();
-    DecimateResult r = decimate(mesh, {.target_faces = target});
-    return {std::move(r.mesh), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()};
-  }
-  SimplifyOptions o;
-  o.method = *parse_method(method);
-  o.target_faces = target;
-  const auto t0 = std::chrono::steady_clock::now();
-  SimplifyResult r = simplify(mesh, o);
-  return {std::move(r.mesh), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()};
-}
-
 Outcome run_in_child(const std::string& method, const fs::path& input, Index target, const fs::path& output) {
   int fds[2];
   if (pipe(fds) != 0) std::exit(1);
@@ -75,7 +44,7 @@ Outcome run_in_child(const std::string& method, const fs::path& input, Index tar
   if (pid == 0) {
     close(fds[0]);
     const Mesh mesh = read_mesh(input);
-    const bench::PeerRun run = run_method(method, mesh, target);
+    const bench::PeerRun run = bench::run_method(method, mesh, target);
     write_mesh(run.mesh, output);
     if (write(fds[1], &run.seconds, sizeof run.seconds) != sizeof run.seconds) _exit(4);
     _exit(0);
@@ -93,27 +62,21 @@ Outcome run_in_child(const std::string& method, const fs::path& input, Index tar
   return o;
 }
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
-  return out;
-}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string> methods{"quadric", "hoppe", "edge-length", "schroeder", "pm", "meshopt", "meshopt-sloppy", "openmesh", "cgal"};
+  std::vector<std::string> methods = bench::all_methods();
   std::vector<double> targets{0.1, 0.01};
   std::vector<std::string> inputs;
   std::string csv_path;
   Index hoppe_max_faces = 150'000;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--methods" && i + 1 < argc) methods = split(argv[++i]);
+    if (a == "--methods" && i + 1 < argc) methods = bench::split_list(argv[++i]);
     else if (a == "--targets" && i + 1 < argc) {
       targets.clear();
-      for (const auto& t : split(argv[++i])) targets.push_back(std::stod(t));
+      for (const auto& t : bench::split_list(argv[++i])) targets.push_back(std::stod(t));
     } else if (a == "--csv" && i + 1 < argc) csv_path = argv[++i];
     else if (a == "--hoppe-max-faces" && i + 1 < argc) hoppe_max_faces = std::stoi(argv[++i]);
     else inputs.push_back(a);

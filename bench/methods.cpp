@@ -1,0 +1,60 @@
+#include "methods.h"
+
+#include <lodkit/decimate.h>
+#include <lodkit/error.h>
+#include <lodkit/progressive.h>
+#include <lodkit/simplify.h>
+
+#include <chrono>
+#include <sstream>
+
+namespace lodkit::bench {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+const std::vector<std::string>& all_methods() {
+  static const std::vector<std::string> names{"quadric", "hoppe",          "edge-length", "schroeder", "pm",
+                                              "meshopt", "meshopt-sloppy", "openmesh",    "cgal"};
+  return names;
+}
+
+PeerRun run_method(const std::string& method, const Mesh& mesh, Index target) {
+  if (method == "meshopt") return run_meshoptimizer(mesh, target, false);
+  if (method == "meshopt-sloppy") return run_meshoptimizer(mesh, target, true);
+  if (method == "openmesh") return run_openmesh(mesh, target);
+  if (method == "cgal") return run_cgal(mesh, target);
+  const auto t0 = std::chrono::steady_clock::now();
+  if (method == "pm") {
+    // The progressive-mesh path: build the stream (quadric collapses), then extract the level with
+    // the target's face count: the cost of one level from scratch; every further level of the same
+    // mesh costs only the extraction (see the progressive-mesh section of docs/benchmarks.md).
+    const ProgressiveMesh pm = build_progressive_mesh(mesh);
+    ExtractedLevel level = extract_level(pm, level_for_faces(pm, target));
+    return {std::move(level.mesh), seconds_since(t0)};
+  }
+  if (method == "schroeder") {
+    DecimateResult r = decimate(mesh, {.target_faces = target});
+    return {std::move(r.mesh), seconds_since(t0)};
+  }
+  const auto parsed = parse_method(method);
+  if (!parsed) throw Error("unknown method " + method);
+  SimplifyOptions o;
+  o.method = *parsed;
+  o.target_faces = target;
+  SimplifyResult r = simplify(mesh, o);
+  return {std::move(r.mesh), seconds_since(t0)};
+}
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
+  return out;
+}
+
+}  // namespace lodkit::bench
