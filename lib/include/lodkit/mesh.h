@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,8 @@ double signed_volume(const Mesh& mesh);
 
 /// Both meshes in one: b's vertices and faces appended after a's (attributes dropped).
 Mesh concatenated(const Mesh& a, const Mesh& b);
+/// All parts in one, in order (attributes dropped); one copy, however many parts.
+Mesh concatenated(std::span<const Mesh> parts);
 
 /// Area-weighted vertex normals (unit length; zero only for isolated vertices).
 Normals compute_vertex_normals(const Mesh& mesh);

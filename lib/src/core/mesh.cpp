@@ -164,14 +164,34 @@ double signed_volume(const Mesh& mesh) {
   return six_volume / 6.0;
 }
 
-Mesh concatenated(const Mesh& a, const Mesh& b) {
+namespace {
+
+Mesh concatenate(std::span<const Mesh* const> parts) {
+  Index nv = 0, nf = 0;
+  for (const Mesh* p : parts) nv += p->num_vertices(), nf += p->num_faces();
   Mesh m;
-  m.positions.resize(a.num_vertices() + b.num_vertices(), 3);
-  m.positions << a.positions, b.positions;
-  m.triangles.resize(a.num_faces() + b.num_faces(), 3);
-  m.triangles.topRows(a.num_faces()) = a.triangles;
-  m.triangles.bottomRows(b.num_faces()) = b.triangles.array() + a.num_vertices();
+  m.positions.resize(nv, 3);
+  m.triangles.resize(nf, 3);
+  Index v = 0, f = 0;
+  for (const Mesh* p : parts) {
+    m.positions.middleRows(v, p->num_vertices()) = p->positions;
+    m.triangles.middleRows(f, p->num_faces()) = p->triangles.array() + v;
+    v += p->num_vertices(), f += p->num_faces();
+  }
   return m;
+}
+
+}  // namespace
+
+Mesh concatenated(const Mesh& a, const Mesh& b) {
+  const Mesh* parts[] = {&a, &b};
+  return concatenate(parts);
+}
+
+Mesh concatenated(std::span<const Mesh> parts) {
+  std::vector<const Mesh*> pointers;
+  for (const Mesh& p : parts) pointers.push_back(&p);
+  return concatenate(pointers);
 }
 
 Normals compute_vertex_normals(const Mesh& mesh) {

@@ -144,14 +144,10 @@ bool clean_and_check(SM& sm) {
 // or refuse.
 bool rounded_result_is_valid(Mesh& m) {
   if (m.num_faces() == 0) return true;
-  using SM = CGAL::Surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel::Point_3>;
   const Mesh w = welded(m);
-  SM sm;
-  std::vector<SM::Vertex_index> v;
-  for (Index i = 0; i < w.num_vertices(); ++i) v.push_back(sm.add_vertex({w.positions(i, 0), w.positions(i, 1), w.positions(i, 2)}));
-  for (Index f = 0; f < w.num_faces(); ++f)
-    if (sm.add_face(v[w.triangles(f, 0)], v[w.triangles(f, 1)], v[w.triangles(f, 2)]) == SM::null_face()) return false;
-  if (!clean_and_check(sm)) return false;
+  std::vector<std::string> repaired;  // non-empty: some faces could not be connected as they are
+  auto sm = to_surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel>(w, "result", repaired);
+  if (!repaired.empty() || !clean_and_check(sm)) return false;
   m = from_surface_mesh(sm);
   return true;
 }

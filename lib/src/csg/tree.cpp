@@ -218,8 +218,7 @@ struct Evaluator {
       // test shows that none touches or contains another. Every part is a valid solid already (a
       // primitive, a checked file or a checked result), so pairwise disjoint bounding boxes settle
       // it without testing a single triangle pair.
-      Mesh all = parts[0];
-      for (std::size_t i = 1; i < parts.size(); ++i) all = concatenated(all, parts[i]);
+      Mesh all = concatenated(parts);
       if (have_disjoint_boxes(parts) || are_separate_solids(all)) return all;
     }
     while (parts.size() > 1) {
