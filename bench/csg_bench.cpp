@@ -11,16 +11,14 @@
 
 #include <algorithm>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fmt/format.h>
 #include <functional>
 #include <string>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
+#include "child_process.h"
 #include "peers/peers.h"
 
 using namespace lodkit;
@@ -35,31 +33,19 @@ struct Timed {
 };
 
 Timed run_in_child(const std::function<Mesh()>& work, int limit_seconds) {
-  int fds[2];
-  if (pipe(fds) != 0) std::exit(1);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fds[0]);
-    alarm(static_cast<unsigned>(limit_seconds));
-    const auto t0 = std::chrono::steady_clock::now();
-    const Mesh m = work();
-    double out[3] = {std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), double(m.num_faces()),
-                     inspect(m).volume.value_or(0.0)};
-    if (write(fds[1], out, sizeof out) != sizeof out) _exit(4);
-    _exit(0);
-  }
-  close(fds[1]);
+  const bench::ChildRun run = bench::run_in_child(
+      [&] {
+        const auto t0 = std::chrono::steady_clock::now();
+        const Mesh m = work();
+        return std::vector<double>{std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                                   double(m.num_faces()), inspect(m).volume.value_or(0.0)};
+      },
+      3, limit_seconds);
   Timed t;
-  double in[3];
-  t.ok = read(fds[0], in, sizeof in) == sizeof in;
-  close(fds[0]);
-  int status = 0;
-  rusage usage{};
-  wait4(pid, &status, 0, &usage);
-  t.timed_out = WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM;
-  t.ok = t.ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  t.peak_mib = usage.ru_maxrss / 1024.0;
-  if (t.ok) t.seconds = in[0], t.faces = static_cast<long>(in[1]), t.volume = in[2];
+  t.ok = run.ok();
+  t.timed_out = run.end == bench::ChildRun::End::TimedOut;
+  t.peak_mib = run.peak_mib;
+  if (t.ok) t.seconds = run.reply[0], t.faces = static_cast<long>(run.reply[1]), t.volume = run.reply[2];
   return t;
 }
 

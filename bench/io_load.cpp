@@ -17,11 +17,10 @@
 #include <fmt/format.h>
 #include <functional>
 #include <string>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <tiny_obj_loader.h>
-#include <unistd.h>
 #include <vector>
+
+#include "child_process.h"
 
 namespace fs = std::filesystem;
 
@@ -29,35 +28,25 @@ namespace {
 
 struct Sample {
   double seconds;
-  long max_rss_kib;
+  double peak_mib;
 };
 
 // Runs `load` in a child process; returns its wall time (measured in the child) and peak RSS.
 Sample run_in_child(const std::function<long()>& load) {
-  int fds[2];
-  if (pipe(fds) != 0) std::perror("pipe"), std::exit(1);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fds[0]);
-    const auto t0 = std::chrono::steady_clock::now();
-    const long faces = load();
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (faces <= 0) _exit(3);
-    if (write(fds[1], &s, sizeof s) != sizeof s) _exit(4);
-    _exit(0);
-  }
-  close(fds[1]);
-  double seconds = -1;
-  if (read(fds[0], &seconds, sizeof seconds) != sizeof seconds) seconds = -1;
-  close(fds[0]);
-  int status = 0;
-  rusage usage{};
-  wait4(pid, &status, 0, &usage);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::fprintf(stderr, "a reader failed (status %d)\n", status);
+  const lodkit::bench::ChildRun run = lodkit::bench::run_in_child(
+      [&] {
+        const auto t0 = std::chrono::steady_clock::now();
+        const long faces = load();
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (faces <= 0) std::_Exit(3);
+        return std::vector<double>{s};
+      },
+      1);
+  if (!run.ok()) {
+    std::fprintf(stderr, "a reader failed\n");
     std::exit(1);
   }
-  return {seconds, usage.ru_maxrss};
+  return {run.reply[0], run.peak_mib};
 }
 
 Sample median(const std::function<long()>& load, int runs) {
@@ -119,7 +108,7 @@ int main(int argc, char** argv) {
   fmt::print("| file | reader | load time (s) | peak RSS (MiB) | triangles/s (M) | vs lodkit |\n");
   fmt::print("|---|---|---:|---:|---:|---:|\n");
   auto row = [&](const char* file, const char* reader, const Sample& s, double base) {
-    fmt::print("| {} | {} | {:.3f} | {:.0f} | {:.1f} | {:.1f}x |\n", file, reader, s.seconds, s.max_rss_kib / 1024.0,
+    fmt::print("| {} | {} | {:.3f} | {:.0f} | {:.1f} | {:.1f}x |\n", file, reader, s.seconds, s.peak_mib,
                mesh.num_faces() / s.seconds / 1e6, s.seconds / base);
   };
   const Sample lk_obj = median([&] { return load_lodkit(obj); }, runs);

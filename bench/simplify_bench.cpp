@@ -10,19 +10,17 @@
 #include <lodkit/io.h>
 #include <lodkit/metrics.h>
 
-#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fmt/format.h>
 
 #include <fstream>
-#include <sstream>
 #include <string>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
 
+#include "child_process.h"
 #include "methods.h"
 
 namespace fs = std::filesystem;
@@ -38,30 +36,20 @@ struct Outcome {
 };
 
 Outcome run_in_child(const std::string& method, const fs::path& input, Index target, const fs::path& output) {
-  int fds[2];
-  if (pipe(fds) != 0) std::exit(1);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fds[0]);
-    const Mesh mesh = read_mesh(input);
-    const bench::PeerRun run = bench::run_method(method, mesh, target);
-    write_mesh(run.mesh, output);
-    if (write(fds[1], &run.seconds, sizeof run.seconds) != sizeof run.seconds) _exit(4);
-    _exit(0);
-  }
-  close(fds[1]);
+  const bench::ChildRun run = bench::run_in_child(
+      [&] {
+        const Mesh mesh = read_mesh(input);
+        const bench::PeerRun r = bench::run_method(method, mesh, target);
+        write_mesh(r.mesh, output);
+        return std::vector<double>{r.seconds};
+      },
+      1);
   Outcome o;
-  o.ok = read(fds[0], &o.seconds, sizeof o.seconds) == sizeof o.seconds;
-  close(fds[0]);
-  int status = 0;
-  rusage usage{};
-  wait4(pid, &status, 0, &usage);
-  o.ok = o.ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  o.peak_mib = usage.ru_maxrss / 1024.0;
-  if (o.ok) o.mesh = read_mesh(output);
+  o.ok = run.ok();
+  o.peak_mib = run.peak_mib;
+  if (o.ok) o.seconds = run.reply[0], o.mesh = read_mesh(output);
   return o;
 }
-
 
 }  // namespace
 

@@ -12,19 +12,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <fstream>
-#include <map>
-#include <sstream>
 #include <string>
-#include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
 
+#include "child_process.h"
 #include "methods.h"
 #include "stability_suite.h"
 
@@ -53,46 +50,23 @@ struct Run {
 };
 
 Run run_in_child(const std::string& method, const Mesh& input, Index target, const fs::path& output, int limit) {
-  int fds[2];
-  if (pipe(fds) != 0) std::exit(1);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fds[0]);
-    alarm(static_cast<unsigned>(limit));
-    double reply[2] = {double(Status::Error), 0};
-    try {
-      const bench::PeerRun r = bench::run_method(method, input, target);
-      reply[1] = r.seconds;
-      if (!r.mesh.positions.allFinite()) {
-        reply[0] = double(Status::NonFinite);
-      } else {
+  const bench::ChildRun child = bench::run_in_child(
+      [&] {
+        const bench::PeerRun r = bench::run_method(method, input, target);
+        if (!r.mesh.positions.allFinite()) return std::vector<double>{double(Status::NonFinite), r.seconds};
         write_mesh(r.mesh, output);
-        reply[0] = double(Status::Ok);
-      }
-    } catch (const std::exception&) {
-      reply[0] = double(Status::Error);
-    }
-    if (write(fds[1], reply, sizeof reply) != sizeof reply) _exit(4);
-    _exit(0);
-  }
-  close(fds[1]);
-  double reply[2] = {0, 0};
-  const bool replied = read(fds[0], reply, sizeof reply) == sizeof reply;
-  close(fds[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
+        return std::vector<double>{double(Status::Ok), r.seconds};
+      },
+      2, limit);
   Run run;
-  if (WIFSIGNALED(status)) {
-    run.status = WTERMSIG(status) == SIGALRM ? Status::Timeout : Status::Crash;
-    return run;
-  }
-  if (!replied) return run;
-  run.status = static_cast<Status>(static_cast<int>(reply[0]));
-  run.seconds = reply[1];
+  if (child.end == bench::ChildRun::End::Crashed) run.status = Status::Crash;
+  if (child.end == bench::ChildRun::End::TimedOut) run.status = Status::Timeout;
+  if (!child.ok()) return run;  // Error unless it crashed or hung
+  run.status = static_cast<Status>(static_cast<int>(child.reply[0]));
+  run.seconds = child.reply[1];
   if (run.status == Status::Ok) run.mesh = read_mesh(output);
   return run;
 }
-
 
 }  // namespace
 

@@ -7,9 +7,6 @@
 #include <lodkit/terrain.h>
 
 #include <fmt/format.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -20,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "child_process.h"
+
 namespace {
 
 struct Measure {
@@ -27,21 +26,17 @@ struct Measure {
   double peak_mib = 0;
 };
 
-/// Runs `job` in a child; wall time from the parent, peak RSS from wait4.
+/// Runs `job` in a child; wall time from the parent (fork and exit included),
+/// peak RSS from wait4.
 Measure in_child(const std::function<void()>& job) {
   const auto start = std::chrono::steady_clock::now();
-  const pid_t pid = fork();
-  if (pid == 0) {
+  const lodkit::bench::ChildRun run = lodkit::bench::run_in_child([&] {
     job();
-    _exit(0);
-  }
-  int status = 0;
-  rusage usage{};
-  wait4(pid, &status, 0, &usage);
+    return std::vector<double>{};
+  }, 0);
   Measure m;
-  m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  m.peak_mib = static_cast<double>(usage.ru_maxrss) / 1024.0;
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) m.seconds = -1;
+  m.seconds = run.ok() ? std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() : -1;
+  m.peak_mib = run.peak_mib;
   return m;
 }
 

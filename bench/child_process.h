@@ -1,0 +1,69 @@
+#pragma once
+// Every benchmark run happens in a forked child: its peak memory is its own (wait4's ru_maxrss), and a
+// crash, a hang or an exception is a result to report, not the end of the benchmark.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <exception>
+#include <functional>
+#include <vector>
+
+namespace lodkit::bench {
+
+struct ChildRun {
+  enum class End { Exited, Crashed, TimedOut };
+  End end = End::Crashed;
+  int exit_code = 0;
+  double peak_mib = 0;        ///< the child's maximum resident set
+  std::vector<double> reply;  ///< what `work` returned, empty unless all of it arrived
+
+  /// Exited with status 0 after sending its whole reply.
+  bool ok() const { return end == End::Exited && exit_code == 0; }
+};
+
+/// Runs `work` in a child process, with a time limit in seconds (0: none). `work` returns
+/// `reply_size` numbers, which come back through a pipe; an exception in the child ends it with exit
+/// code 3.
+inline ChildRun run_in_child(const std::function<std::vector<double>()>& work, std::size_t reply_size,
+                             int limit_seconds = 0) {
+  int fds[2];
+  if (pipe(fds) != 0) std::exit(1);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    if (limit_seconds > 0) alarm(static_cast<unsigned>(limit_seconds));
+    std::vector<double> reply;
+    try {
+      reply = work();
+    } catch (const std::exception&) {
+      _exit(3);
+    }
+    reply.resize(reply_size);
+    const auto bytes = static_cast<ssize_t>(reply_size * sizeof(double));
+    if (write(fds[1], reply.data(), static_cast<std::size_t>(bytes)) != bytes) _exit(4);
+    _exit(0);
+  }
+  close(fds[1]);
+  ChildRun run;
+  std::vector<double> reply(reply_size);
+  const auto bytes = static_cast<ssize_t>(reply_size * sizeof(double));
+  const bool replied = read(fds[0], reply.data(), static_cast<std::size_t>(bytes)) == bytes;
+  close(fds[0]);
+  int status = 0;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  run.peak_mib = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  if (WIFSIGNALED(status)) {
+    run.end = WTERMSIG(status) == SIGALRM ? ChildRun::End::TimedOut : ChildRun::End::Crashed;
+    return run;
+  }
+  run.end = ChildRun::End::Exited;
+  run.exit_code = WEXITSTATUS(status);
+  if (replied && run.exit_code == 0) run.reply = std::move(reply);
+  return run;
+}
+
+}  // namespace lodkit::bench
