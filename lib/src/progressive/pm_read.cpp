@@ -331,14 +331,16 @@ bool decode_block(std::string_view payload, const Header& h, StreamState& st, Pr
       rec.changes.push_back({f, k, fine});
     }
     if (st.quantised) {
-      std::array<std::int64_t, 3> predicted_new = st.qposition[static_cast<std::size_t>(s)], predicted_split = predicted_new;
-      if (predictor == 1) predict_positions(st, rec, predicted_new, predicted_split);
+      const auto& coarse = st.qposition[static_cast<std::size_t>(s)];
+      PredictionRings rings;
+      if (predictor == 1) rings = prediction_rings(st, rec);
+      const auto predicted_new = predictor == 1 ? ring_centroid(st, rings.new_point, coarse) : coarse;
       std::array<std::uint32_t, 3> a{}, b{};
       for (int d = 0; d < 3; ++d) {
         if (!in[kResidualNew].next(a[d]) || !in[kResidualSplit].next(b[d])) return bad("missing position residual");
         rec.qnew[d] = predicted_new[d] + unzigzag(a[d]);
       }
-      if (predictor == 1) predict_positions(st, rec, predicted_new, predicted_split);  // now with qnew
+      const auto predicted_split = predictor == 1 ? ring_centroid(st, rings.split_point, rec.qnew) : coarse;
       for (int d = 0; d < 3; ++d) rec.qfine[d] = predicted_split[d] + unzigzag(b[d]);
     } else {
       for (int d = 0; d < 3; ++d)
@@ -346,35 +348,30 @@ bool decode_block(std::string_view payload, const Header& h, StreamState& st, Pr
       for (int d = 0; d < 3; ++d)
         if (!raw.get(rec.new_position[d]) || !std::isfinite(rec.new_position[d])) return bad("bad position");
     }
-    for (Index i = 0; i < rec.num_wedges; ++i) {
-      const Index parent = parent_wedge(rec, st, first_new + i);
+    // One wedge's attribute values: quantised codes against wedge `base`'s, or raw doubles.
+    auto read_values = [&](Index base, Stream stream, std::vector<std::int64_t>& codes, std::vector<double>& values) {
       for (std::size_t d = 0; d < dims; ++d) {
         if (st.quantised) {
-          if (!in[kAttribute].next(v)) return bad("missing attribute");
-          rec.qnew_attributes.push_back(st.qattribute[dims * static_cast<std::size_t>(parent) + d] + unzigzag(v));
+          if (!in[stream].next(v)) return false;
+          codes.push_back(st.qattribute[dims * static_cast<std::size_t>(base) + d] + unzigzag(v));
         } else {
           double a = 0;
-          if (!raw.get(a) || !std::isfinite(a)) return bad("bad attribute");
-          rec.new_attributes.push_back(a);
+          if (!raw.get(a) || !std::isfinite(a)) return false;
+          values.push_back(a);
         }
       }
-    }
+      return true;
+    };
+    for (Index i = 0; i < rec.num_wedges; ++i)
+      if (!read_values(parent_wedge(rec, st, first_new + i), kAttribute, rec.qnew_attributes, rec.new_attributes))
+        return bad("bad attribute");
     std::uint32_t changes = 0;
     if (!in[kAttributeChangeCount].next(changes) || changes > static_cast<std::uint32_t>(st.point_num_wedges[s])) return bad("bad attribute changes");
     for (std::uint32_t i = 0; i < changes; ++i) {
       if (!in[kAttributeChangeWedge].next(v) || v >= static_cast<std::uint32_t>(st.point_num_wedges[s])) return bad("bad attribute change");
       const Index w = st.point_first_wedge[s] + static_cast<Index>(v);
       rec.attribute_wedges.push_back(w);
-      for (std::size_t d = 0; d < dims; ++d) {
-        if (st.quantised) {
-          if (!in[kAttributeChange].next(v)) return bad("missing attribute change");
-          rec.qattribute_values.push_back(st.qattribute[dims * static_cast<std::size_t>(w) + d] + unzigzag(v));
-        } else {
-          double a = 0;
-          if (!raw.get(a) || !std::isfinite(a)) return bad("bad attribute change");
-          rec.attribute_values.push_back(a);
-        }
-      }
+      if (!read_values(w, kAttributeChange, rec.qattribute_values, rec.attribute_values)) return bad("bad attribute change");
     }
     if (pm.has_face_colours)
       for (Index i = 0; i < rec.num_faces; ++i)

@@ -200,10 +200,9 @@ Index parent_wedge(const SplitRecord& r, const StreamState& st, Index fine) {
   return st.point_first_wedge[static_cast<std::size_t>(r.point)];
 }
 
-void predict_positions(const StreamState& st, const SplitRecord& r, std::array<std::int64_t, 3>& new_point,
-                       std::array<std::int64_t, 3>& split_point) {
+PredictionRings prediction_rings(const StreamState& st, const SplitRecord& r) {
   const Index s = r.point, t = st.num_points();
-  std::vector<Index> ring_t, ring_s;
+  PredictionRings rings;
   auto add_points_of = [&](const std::array<Index, 3>& corners, std::vector<Index>& ring) {
     for (Index w : corners) {
       const Index p = point_before(st, w, t);
@@ -211,27 +210,31 @@ void predict_positions(const StreamState& st, const SplitRecord& r, std::array<s
     }
   };
   for (Index i = 0; i < r.num_faces; ++i) {
-    add_points_of(r.faces[static_cast<std::size_t>(i)], ring_t);
-    add_points_of(r.faces[static_cast<std::size_t>(i)], ring_s);
+    add_points_of(r.faces[static_cast<std::size_t>(i)], rings.new_point);
+    add_points_of(r.faces[static_cast<std::size_t>(i)], rings.split_point);
   }
   std::size_t moved = 0;  // changes are in face order, like s's face list
   for (Index f : st.point_faces[static_cast<std::size_t>(s)]) {
     const bool to_t = moved < r.changes.size() && r.changes[moved][0] == f;
     moved += to_t;
-    add_points_of(st.corners[static_cast<std::size_t>(f)], to_t ? ring_t : ring_s);
+    add_points_of(st.corners[static_cast<std::size_t>(f)], to_t ? rings.new_point : rings.split_point);
   }
-  // Each ring also holds the other point of the pair: s (coarse) for t, and t (r.qnew) for s.
-  auto centroid = [&](std::vector<Index>& ring, const std::array<std::int64_t, 3>& partner, std::array<std::int64_t, 3>& out) {
-    std::sort(ring.begin(), ring.end());
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-    for (int d = 0; d < 3; ++d) {
-      std::int64_t sum = partner[d];
-      for (Index p : ring) sum += st.qposition[static_cast<std::size_t>(p)][d];
-      out[d] = static_cast<std::int64_t>(std::llround(static_cast<double>(sum) / static_cast<double>(ring.size() + 1)));
-    }
-  };
-  centroid(ring_t, st.qposition[static_cast<std::size_t>(s)], new_point);
-  centroid(ring_s, r.qnew, split_point);
+  for (std::vector<Index>* ring : {&rings.new_point, &rings.split_point}) {
+    std::sort(ring->begin(), ring->end());
+    ring->erase(std::unique(ring->begin(), ring->end()), ring->end());
+  }
+  return rings;
+}
+
+std::array<std::int64_t, 3> ring_centroid(const StreamState& st, const std::vector<Index>& ring,
+                                          const std::array<std::int64_t, 3>& partner) {
+  std::array<std::int64_t, 3> out{};
+  for (int d = 0; d < 3; ++d) {
+    std::int64_t sum = partner[d];
+    for (Index p : ring) sum += st.qposition[static_cast<std::size_t>(p)][d];
+    out[d] = static_cast<std::int64_t>(std::llround(static_cast<double>(sum) / static_cast<double>(ring.size() + 1)));
+  }
+  return out;
 }
 
 void apply_split(StreamState& st, const SplitRecord& r) {

@@ -218,12 +218,18 @@ Index paired_fine_wedge(const SplitRecord& r, const StreamState& st, Index coars
 /// The split point's wedge a new wedge splits from: its partner in a new face, else the first one.
 Index parent_wedge(const SplitRecord& r, const StreamState& st, Index fine);
 
-/// Quantised positions predicted from the split's connectivity (asked before it is applied): each of
-/// the two points at the centroid of its ring after the split (the umbrella rule), where the new
+/// Quantised positions are predicted from the split's connectivity (asked before it is applied): each
+/// of the two points at the centroid of its ring after the split (the umbrella rule), where the new
 /// point's ring counts the split point at its coarse position and the split point's ring counts the
-/// new point at r.qnew (so the split point's prediction is only valid once r.qnew is known).
-void predict_positions(const StreamState& st, const SplitRecord& r, std::array<std::int64_t, 3>& new_point,
-                       std::array<std::int64_t, 3>& split_point);
+/// new point at r.qnew. The rings (sorted, no repeats) come from the connectivity alone, so a decoder
+/// finds them once, predicts the new point, decodes r.qnew, then predicts the split point.
+struct PredictionRings {
+  std::vector<Index> new_point, split_point;
+};
+PredictionRings prediction_rings(const StreamState& st, const SplitRecord& r);
+/// The rounded centroid of the ring's quantised positions and `partner`.
+std::array<std::int64_t, 3> ring_centroid(const StreamState& st, const std::vector<Index>& ring,
+                                          const std::array<std::int64_t, 3>& partner);
 
 /// Applies a split to the state (both coder sides call this).
 void apply_split(StreamState& st, const SplitRecord& r);

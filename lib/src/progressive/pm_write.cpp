@@ -199,9 +199,10 @@ SplitRecord code_split(const ProgressiveMesh& pm, std::size_t j, const StreamSta
   if (st.quantised) {
     const Quantiser& q = st.position_quantiser;
     const auto& coarse = st.qposition[static_cast<std::size_t>(s)];
-    std::array<std::int64_t, 3> predicted_new{}, predicted_split{};
     for (int d = 0; d < 3; ++d) r.qnew[d] = q.q(vs.new_position[d]), r.qfine[d] = q.q(vs.position[d]);
-    predict_positions(st, r, predicted_new, predicted_split);
+    const PredictionRings rings = prediction_rings(st, r);
+    const auto predicted_new = ring_centroid(st, rings.new_point, coarse);
+    const auto predicted_split = ring_centroid(st, rings.split_point, r.qnew);
     for (int d = 0; d < 3; ++d) {
       out[kResidualNew].push_back(zigzag(r.qnew[d] - coarse[d]));
       out[kResidualSplit].push_back(zigzag(r.qfine[d] - coarse[d]));
