@@ -208,5 +208,68 @@ TEST(CsgTree, ManyPartUnionsAreExactWhetherPartsOverlapTouchOrStandApart) {
   }
 }
 
+TEST(CsgSplit, HalvesOfASolidJoinBackToTheSameSolid) {
+  // Convex, curved, and with a hole (the torus's cross-section through its axis is two discs).
+  const std::vector<Mesh> solids{make_box({.size = {2, 1, 0.5}}), make_uv_sphere({.tolerance = 0.01}),
+                                 make_torus({.major_radius = 1, .minor_radius = 0.3, .tolerance = 0.01})};
+  for (const Mesh& solid : solids) {
+    const MeshReport whole = inspect(solid);
+    for (int axis = 0; axis < 3; ++axis)
+      for (const double at : {-0.1234, 0.0, 0.0371, 0.2}) {
+        SCOPED_TRACE(fmt::format("{} faces, axis {}, at {}", solid.num_faces(), axis, at));
+        const auto [below, above] = split_solid(solid, axis, at);
+        expect_solid(below);
+        expect_solid(above);
+        EXPECT_LE(below.positions.col(axis).maxCoeff(), at);
+        EXPECT_GE(above.positions.col(axis).minCoeff(), at);
+        EXPECT_NEAR(volume_of(below) + volume_of(above), *whole.volume, 1e-12 * *whole.volume);
+        const std::optional<Mesh> joined = join_solids(below, above, axis, at);
+        ASSERT_TRUE(joined);
+        expect_solid(*joined);
+        const MeshReport r = inspect(*joined);
+        EXPECT_NEAR(*r.volume, *whole.volume, 1e-12 * *whole.volume);
+        EXPECT_EQ(r.components, whole.components);
+        EXPECT_EQ(r.genus, whole.genus);
+      }
+  }
+  // A plane that misses the solid leaves it whole on one side.
+  const Mesh box = make_box({});
+  EXPECT_EQ(split_solid(box, 0, 0.5).first.triangles, box.triangles);  // touching is missing
+  EXPECT_EQ(split_solid(box, 2, -3).second.triangles, box.triangles);
+  EXPECT_EQ(split_solid(box, 2, -3).first.num_faces(), 0);
+}
+
+TEST(CsgSplit, SolidsWhoseSeamsDoNotMatchAreNotJoined) {
+  // Two boxes face to face in x = 0.5, but the second's face is larger: the seam edges differ, so only
+  // a union can combine them.
+  const Mesh small = make_box({}), large = moved(make_box({.size = {1, 2, 2}}), 1, 0, 0);
+  EXPECT_FALSE(join_solids(small, large, 0, 0.5));
+}
+
+TEST(CsgTree, ADifferenceOfManyPartsIsTheSameSolidWhetherSplitOrNot) {
+  // A plate minus a 6 x 4 grid of cylinders: 24 cutting parts, so it is cut between two groups and
+  // joined again. Same volume, one component, one hole per cylinder, and a result that repeats.
+  std::string children = R"({"primitive": "box", "size": [6, 4, 0.5]})";
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 4; ++j)
+      children += fmt::format(R"(, {{"primitive": "cylinder", "radius": 0.3, "height": 1, "transform": {{"translate": [{}, {}, 0]}}}})",
+                              i - 2.5, j - 1.5);
+  const CsgNode tree = parse_csg(fmt::format(R"({{"op": "difference", "children": [{}]}})", children), "plate.json", ".");
+  const CsgResult whole = evaluate(tree, {.tolerance = 0.002, .split_at_parts = 0});
+  const CsgResult split = evaluate(tree, {.tolerance = 0.002});
+  EXPECT_EQ(whole.operations, 1);
+  EXPECT_GE(split.operations, 2);  // the halves' differences (the cut and the join are not booleans)
+  for (const CsgResult* r : {&whole, &split}) {
+    expect_solid(r->mesh);
+    const MeshReport report = inspect(r->mesh);
+    EXPECT_EQ(report.components, 1);
+    EXPECT_EQ(report.genus, 24);
+  }
+  EXPECT_NEAR(split.volume, whole.volume, 1e-12 * whole.volume);
+  const CsgResult again = evaluate(tree, {.tolerance = 0.002});
+  EXPECT_EQ(again.mesh.positions, split.mesh.positions);
+  EXPECT_EQ(again.mesh.triangles, split.mesh.triangles);
+}
+
 }  // namespace
 }  // namespace lodkit

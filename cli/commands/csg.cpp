@@ -15,6 +15,7 @@ struct CsgCliOptions {
   std::optional<std::string> format;
   double tolerance = 0.01;
   bool exact = false, json = false;
+  std::size_t split_at_parts = CsgOptions{}.split_at_parts;
 };
 
 void report(const GlobalOptions& global, bool as_json, const std::string& what, const std::string& output, const Mesh& mesh,
@@ -54,6 +55,10 @@ Command add_csg_command(CLI::App& app, const GlobalOptions& global) {
   tree->add_option("--tolerance", opt->tolerance, "Chordal tolerance of curved primitives")->check(CLI::PositiveNumber)
       ->capture_default_str();
   tree->add_flag("--exact", opt->exact, "Exact constructions from the start");
+  tree->add_option("--split-at-parts", opt->split_at_parts,
+                   "Cut a difference with at least this many separate cutting parts in two (in parallel, then "
+                   "joined; adds a seam of edges); 0 never")
+      ->capture_default_str();
   tree->add_flag("--json", opt->json, "Print the result as JSON");
   tree->footer(R"(Nodes: {"op": "union|difference|intersection", "children": [...]},
        {"primitive": "box|sphere|cylinder|cone|torus", "size"/"radius"/"height"/"major_radius"/"minor_radius"},
@@ -73,7 +78,7 @@ Example:
               return 0;
             }
             if (!tree->parsed()) return 2;
-            const CsgResult r = evaluate(read_csg(opt->tree), {.tolerance = opt->tolerance, .exact = opt->exact});
+            const CsgResult r = evaluate(read_csg(opt->tree), {.tolerance = opt->tolerance, .exact = opt->exact, .split_at_parts = opt->split_at_parts});
             write_output(r.mesh, opt->output, opt->format, WriteOptions{});
             report(global, opt->json, fmt::format("tree ({} primitives, {} operations)", r.primitives, r.operations), opt->output,
                    r.mesh, r.volume, r.seconds, r.warnings, false);

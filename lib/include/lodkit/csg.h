@@ -10,7 +10,9 @@
 #include <lodkit/mesh.h>
 
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lodkit {
@@ -45,6 +47,19 @@ void check_solid(const Mesh& mesh, const std::string& name);
 /// union of its shells (a quick test before uniting many separate parts).
 bool are_separate_solids(const Mesh& mesh);
 
+/// Cuts a closed solid by the plane `coordinate[axis] == at` into the closed solids below and above
+/// it (either is empty when the plane misses the solid). The halves share the cut face exactly, so
+/// join_solids() makes the solid again. Vertices within 1e-12 of the bounding-box diagonal of the
+/// plane are moved onto it first.
+/// \throw Error when a half would not be a valid solid after rounding to doubles.
+std::pair<Mesh, Mesh> split_solid(const Mesh& solid, int axis, double at);
+
+/// The solid made of `below` and `above` when they meet only face to face in the plane
+/// `coordinate[axis] == at` (as split_solid()'s halves do, also after each has been cut away from
+/// the plane): their faces in that plane are dropped and the seam is welded. Nothing when the
+/// seams do not match vertex for vertex (then a union is needed).
+std::optional<Mesh> join_solids(const Mesh& below, const Mesh& above, int axis, double at);
+
 /// A node of a CSG tree: an operation over children, a primitive, or a mesh file; each may carry a
 /// transform (applied to the node's result).
 struct CsgNode {
@@ -67,6 +82,9 @@ CsgNode read_csg(const std::filesystem::path& path);
 struct CsgOptions {
   double tolerance = 0.01;  ///< chordal tolerance for every curved primitive
   bool exact = false;
+  /// A difference with at least this many cutting parts is cut by a plane between two groups of them
+  /// into two smaller differences that run in parallel, and joined again; 0 never splits.
+  std::size_t split_at_parts = 16;
 };
 
 struct CsgResult {

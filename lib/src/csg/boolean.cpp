@@ -11,10 +11,14 @@
 #include <CGAL/Surface_mesh.h>
 #include <lodkit/csg.h>
 #include <lodkit/error.h>
+#include <lodkit/primitives.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <fmt/format.h>
 #include <iterator>
+#include <numeric>
 
 namespace lodkit {
 namespace {
@@ -48,27 +52,54 @@ CGAL::Surface_mesh<typename Kernel::Point_3> to_surface_mesh(const Mesh& m, cons
   return oriented;
 }
 
+double rounded(double x) { return x; }
+
+// A lazy exact number's own to_double() returns the middle of whatever interval it holds, which
+// depends on what was computed before (and on which thread): the same point could round two ways.
+// Rounding the exact value gives one answer, so the halves of split_solid() meet vertex for vertex.
+template <typename ET>
+double rounded(const CGAL::Lazy_exact_nt<ET>& x) {
+  const auto& interval = x.approx();
+  if (interval.inf() == interval.sup()) return interval.inf();
+  return CGAL::to_double(CGAL::exact(x));
+}
+
+// The mesh in a canonical order: vertices sorted by position, faces by their vertex indices (each
+// starting at its lowest). CGAL's creation order follows its box-intersection order, which breaks
+// ties by memory address, so without this a parallel evaluation could list the same mesh differently
+// from run to run.
 template <typename SM>
 Mesh from_surface_mesh(const SM& sm) {
-  Mesh m;
-  m.positions.resize(static_cast<Index>(sm.number_of_vertices()), 3);
-  std::vector<Index> id(sm.num_vertices(), -1);
-  Index n = 0;
+  std::vector<std::array<double, 3>> points;
+  std::vector<typename SM::Vertex_index> handles;
   for (auto v : sm.vertices()) {
     const auto& p = sm.point(v);
-    id[v.idx()] = n;
-    m.positions.row(n++) << CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z());
+    points.push_back({rounded(p.x()), rounded(p.y()), rounded(p.z())});
+    handles.push_back(v);
   }
-  m.triangles.resize(static_cast<Index>(sm.number_of_faces()), 3);
-  Index f = 0;
+  std::vector<Index> order(points.size());
+  std::iota(order.begin(), order.end(), Index{0});
+  std::sort(order.begin(), order.end(), [&](Index a, Index b) { return points[a] < points[b]; });
+  Mesh m;
+  m.positions.resize(static_cast<Index>(points.size()), 3);
+  std::vector<Index> id(sm.num_vertices(), -1);
+  for (Index n = 0; n < static_cast<Index>(order.size()); ++n) {
+    const auto& p = points[order[n]];
+    m.positions.row(n) << p[0], p[1], p[2];
+    id[handles[order[n]].idx()] = n;
+  }
+  std::vector<std::array<Index, 3>> faces;
   for (auto face : sm.faces()) {
+    std::array<Index, 3> t{};
     int k = 0;
-    for (auto v : CGAL::vertices_around_face(sm.halfedge(face), sm)) {
-      if (k < 3) m.triangles(f, k) = id[v.idx()];
-      ++k;
-    }
-    ++f;
+    for (auto v : CGAL::vertices_around_face(sm.halfedge(face), sm))
+      if (k < 3) t[k++] = id[v.idx()];
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());  // same orientation
+    faces.push_back(t);
   }
+  std::sort(faces.begin(), faces.end());
+  m.triangles.resize(static_cast<Index>(faces.size()), 3);
+  for (Index f = 0; f < static_cast<Index>(faces.size()); ++f) m.triangles.row(f) << faces[f][0], faces[f][1], faces[f][2];
   return m;
 }
 
@@ -169,6 +200,56 @@ bool are_separate_solids(const Mesh& mesh) {
   SM sm = to_surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel>(w, "parts", warnings);
   return warnings.empty() && sm.number_of_faces() == static_cast<std::size_t>(w.num_faces()) && CGAL::is_closed(sm) &&
          !PMP::does_self_intersect<CGAL::Parallel_if_available_tag>(sm) && PMP::does_bound_a_volume(sm) && PMP::is_outward_oriented(sm);
+}
+
+std::pair<Mesh, Mesh> split_solid(const Mesh& solid, int axis, double at) {
+  if (axis < 0 || axis > 2) throw Error(fmt::format("split_solid: axis must be 0, 1 or 2, got {}", axis));
+  const Eigen::AlignedBox3d box = bounding_box(solid);
+  if (box.isEmpty() || !(at > box.min()[axis] && at < box.max()[axis])) {
+    // The plane misses the solid: all of it lies on one side.
+    if (!box.isEmpty() && at <= box.min()[axis]) return {Mesh{}, solid};
+    return {solid, Mesh{}};
+  }
+  // Vertices a rounding error away from the plane (a sphere's meridian at x = 6e-17, say) go onto it:
+  // cut next to them, the halves would get needle triangles that rounding folds over.
+  Mesh snapped = welded(solid);
+  const double snap = 1e-12 * box.diagonal().norm();
+  for (Index i = 0; i < snapped.num_vertices(); ++i)
+    if (std::abs(snapped.positions(i, axis) - at) <= snap) snapped.positions(i, axis) = at;
+  // Each half is the solid's intersection with a triangular prism whose end face lies in the plane
+  // and holds the solid's whole cross-section in one triangle: no edge of the clipper crosses the
+  // solid, so the cut adds no vertices but where the solid's own edges meet the plane. Exact
+  // constructions make those points round to the same doubles in both halves (and to exactly `at`
+  // across the plane), so the halves meet face to face without slivers.
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const double margin = 1.0 + box.diagonal().maxCoeff();
+  const double u0 = box.min()[u] - margin, v0 = box.min()[v] - margin;
+  const double du = 2 * (box.sizes()[u] + 2 * margin), dv = 2 * (box.sizes()[v] + 2 * margin);  // legs twice the box
+  auto half = [&](bool below) {
+    const double far = below ? box.min()[axis] - margin : box.max()[axis] + margin;
+    Mesh clipper;
+    clipper.positions.resize(6, 3);
+    for (int end = 0; end < 2; ++end)
+      for (int corner = 0; corner < 3; ++corner) {
+        Eigen::Vector3d p;
+        p[axis] = end == 0 ? at : far;
+        p[u] = u0 + (corner == 1 ? du : 0.0);
+        p[v] = v0 + (corner == 2 ? dv : 0.0);
+        clipper.positions.row(3 * end + corner) = p.transpose();
+      }
+    clipper.triangles.resize(8, 3);
+    clipper.triangles << 0, 2, 1, 3, 4, 5, 0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4, 2, 0, 3, 2, 3, 5;
+    if (signed_volume(clipper) < 0) clipper.triangles.col(1).swap(clipper.triangles.col(2));
+    Mesh out;
+    std::vector<std::string> ignored;
+    if (!run<CGAL::Exact_predicates_exact_constructions_kernel>(snapped, clipper, BooleanOp::Intersection, "solid",
+                                                                "half-space", out, ignored, false) ||
+        !rounded_result_is_valid(out))
+      throw Error(fmt::format("split_solid: the halves of the solid at {} = {} are not valid solids",
+                              "xyz"[axis], at));
+    return out;
+  };
+  return {half(true), half(false)};
 }
 
 std::string to_string(BooleanOp op) {

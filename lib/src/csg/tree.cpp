@@ -6,15 +6,19 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <fmt/format.h>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <limits>
 #include <numbers>
+#include <optional>
 #include <mutex>
 #include <sstream>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 namespace lodkit {
 namespace {
@@ -162,6 +166,62 @@ bool have_disjoint_boxes(const std::vector<Mesh>& parts) {
   return true;
 }
 
+// A plane `coordinate[axis] == at` through a solid that no part's bounding box crosses.
+struct SeparatingPlane {
+  int axis = 0;
+  double at = 0.0;
+  std::size_t below = 0;  // parts on the low side
+};
+
+// Where to cut inside the open interval (lo, hi): in the widest stretch free of the solid's vertex
+// coordinates, and not in its middle. A plane through or next to a vertex, or seam points at the
+// "round" coordinates users give (holes on a grid), make near-collinear points, and those are what
+// rounding a corefinement's exact result can break.
+std::optional<double> cut_position(const Mesh& solid, int axis, double lo, double hi) {
+  std::vector<double> stops{lo, hi};
+  for (Index v = 0; v < solid.num_vertices(); ++v)
+    if (const double c = solid.positions(v, axis); lo < c && c < hi) stops.push_back(c);
+  std::sort(stops.begin(), stops.end());
+  std::size_t widest = 0;
+  for (std::size_t i = 1; i + 1 < stops.size(); ++i)
+    if (stops[i + 1] - stops[i] > stops[widest + 1] - stops[widest]) widest = i;
+  const double at = stops[widest] + (std::numbers::sqrt2 - 1.0) * (stops[widest + 1] - stops[widest]);
+  if (!(stops[widest] < at && at < stops[widest + 1])) return std::nullopt;
+  return at;
+}
+
+// The most even split of `parts` by an axis-aligned plane that cuts `solid` and no part's box
+// (along `only_axis` if given, else the solid's longest axis that has one). None when every such
+// plane leaves fewer than two parts on a side.
+std::optional<SeparatingPlane> separating_plane(const Mesh& solid, const std::vector<Mesh>& parts, std::optional<int> only_axis) {
+  const Eigen::AlignedBox3d solid_box = bounding_box(solid);
+  std::vector<Eigen::AlignedBox3d> boxes;
+  for (const Mesh& m : parts) boxes.push_back(bounding_box(m));
+  std::array<int, 3> axes = {0, 1, 2};
+  const Eigen::Vector3d extent = solid_box.sizes();
+  std::stable_sort(axes.begin(), axes.end(), [&](int a, int b) { return extent[a] > extent[b]; });
+  const std::size_t n = boxes.size();
+  auto imbalance = [n](std::size_t below) { return below > n - below ? below - (n - below) : (n - below) - below; };
+  for (int axis : axes) {
+    if (only_axis && axis != *only_axis) continue;
+    std::vector<std::size_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return boxes[a].min()[axis] < boxes[b].min()[axis]; });
+    std::size_t best = 0;  // parts below the best gap (0: none yet)
+    double best_lo = 0, best_hi = 0;
+    double highest = -std::numeric_limits<double>::infinity();  // top of the parts below so far
+    for (std::size_t k = 1; k < n; ++k) {
+      highest = std::max(highest, boxes[order[k - 1]].max()[axis]);
+      const double lo = std::max(highest, solid_box.min()[axis]), hi = std::min(boxes[order[k]].min()[axis], solid_box.max()[axis]);
+      if (!(lo < hi) || std::min(k, n - k) < 2) continue;
+      if (best == 0 || imbalance(k) < imbalance(best)) best = k, best_lo = lo, best_hi = hi;
+    }
+    if (best == 0) continue;
+    if (const auto at = cut_position(solid, axis, best_lo, best_hi)) return SeparatingPlane{axis, *at, best};
+  }
+  return std::nullopt;
+}
+
 // Evaluates a tree bottom-up. Siblings are independent, so children and each level of a pairwise
 // reduction run in parallel (CGAL's kernels are thread-safe on separate meshes).
 struct Evaluator {
@@ -232,6 +292,35 @@ struct Evaluator {
     return std::move(parts.front());
   }
 
+  // a - (b1 u b2 u ...). With many parts (holes to drill, say), a plane between two groups of them
+  // cuts `a` in two, each group is subtracted from its half in parallel, and the halves are joined
+  // along the cut: each corefinement sees only its share of the intersections, and both cores work.
+  // Further cuts of a half run parallel to the first: a crossing cut would put vertices on the first
+  // cut's edges that the other half lacks. The rule depends only on the input, so the result is the
+  // same on any machine.
+  Mesh subtract(Mesh a, std::vector<Mesh> parts, const std::string& name_a, const std::string& name_b,
+                std::optional<int> axis = std::nullopt) {
+    if (a.num_faces() == 0) return a;
+    if (options.split_at_parts > 0 && parts.size() >= options.split_at_parts) {
+      if (const auto plane = separating_plane(a, parts, axis)) {
+        try {
+          auto [below, above] = split_solid(a, plane->axis, plane->at);
+          std::vector<Mesh> lower, upper;
+          for (const Mesh& p : parts) (bounding_box(p).max()[plane->axis] < plane->at ? lower : upper).push_back(p);
+          tbb::parallel_invoke([&] { below = subtract(std::move(below), std::move(lower), name_a, name_b, plane->axis); },
+                               [&] { above = subtract(std::move(above), std::move(upper), name_a, name_b, plane->axis); });
+          if (auto joined = join_solids(below, above, plane->axis, plane->at)) return std::move(*joined);
+          return combine(below, above, BooleanOp::Union, name_a, name_a);
+        } catch (const Error&) {
+          // A half's corefinement can fail to round where the whole one does not (its faces are cut
+          // differently): then the whole difference decides.
+        }
+      }
+    }
+    const Mesh cut = reduce(std::move(parts), BooleanOp::Union, name_b);
+    return combine(a, cut, BooleanOp::Difference, name_a, name_b);
+  }
+
   Mesh node(const CsgNode& n) {
     if (n.kind != CsgNode::Kind::Operation) return transformed(leaf(n), n.transform);
     std::vector<Mesh> parts(n.children.size());
@@ -241,8 +330,7 @@ struct Evaluator {
       // A - B - C - ... = A - (B u C u ...)
       Mesh first = std::move(parts.front());
       parts.erase(parts.begin());
-      const Mesh cut = reduce(std::move(parts), BooleanOp::Union, n.json_path + ".children[1..]");
-      out = combine(first, cut, BooleanOp::Difference, n.children[0].json_path, n.json_path + ".children[1..]");
+      out = subtract(std::move(first), std::move(parts), n.children[0].json_path, n.json_path + ".children[1..]");
     } else {
       out = reduce(std::move(parts), n.op, n.json_path + ".children");
     }
@@ -279,8 +367,10 @@ CsgResult evaluate(const CsgNode& tree, const CsgOptions& options) {
   result.primitives = e.primitives;
   result.operations = e.operations;
   // Parallel siblings finish in any order; sorted, the warnings read the same on every run.
+  // (A difference retried whole after a split failed may repeat a warning.)
   result.warnings = std::move(e.warnings);
   std::sort(result.warnings.begin(), result.warnings.end());
+  result.warnings.erase(std::unique(result.warnings.begin(), result.warnings.end()), result.warnings.end());
   result.volume = signed_volume(result.mesh);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
