@@ -208,6 +208,24 @@ TEST(CsgTree, ManyPartUnionsAreExactWhetherPartsOverlapTouchOrStandApart) {
   }
 }
 
+TEST(Csg, NeedlesWhoseCornersRoundToOnePointAreDroppedNotRefused) {
+  // A unit cube against a copy turned by 1e-14 degrees: the exact result has needle triangles
+  // whose two close corners round to the same double. Such a needle is gone after rounding (as if
+  // its short edge had been collapsed); before, the result was refused as unconnectable.
+  const std::pair<const char*, const char*> cases[] = {{"difference", "[1, 2, 3], \"degrees\": 3e-14"},
+                                                       {"difference", "[1, 1, 0], \"degrees\": 1e-14"},
+                                                       {"union", "[2, -1, 5], \"degrees\": 1e-14"}};
+  for (const auto& [op, rotation] : cases) {
+    SCOPED_TRACE(fmt::format("{} {}", op, rotation));
+    const CsgResult r = evaluate(parse_csg(
+        fmt::format(R"({{"op": "{}", "children": [{{"primitive": "box"}}, {{"primitive": "box", "transform": {{"rotate": {{"axis": {}}}, "translate": [0.5, 0.5, 0]}}}}]}})",
+                    op, rotation),
+        "turned.json", "."));
+    expect_solid(r.mesh);
+    EXPECT_NEAR(r.volume, std::string(op) == "union" ? 1.75 : 0.75, 1e-9);
+  }
+}
+
 TEST(CsgSplit, HalvesOfASolidJoinBackToTheSameSolid) {
   // Convex, curved, and with a hole (the torus's cross-section through its axis is two discs).
   const std::vector<Mesh> solids{make_box({.size = {2, 1, 0.5}}), make_uv_sphere({.tolerance = 0.01}),

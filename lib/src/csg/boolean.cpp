@@ -61,7 +61,10 @@ template <typename ET>
 double rounded(const CGAL::Lazy_exact_nt<ET>& x) {
   const auto& interval = x.approx();
   if (interval.inf() == interval.sup()) return interval.inf();
-  return CGAL::to_double(CGAL::exact(x));
+  const ET& e = CGAL::exact(x);
+  const auto [below, above] = CGAL::to_interval(e);  // the doubles on either side
+  if (below == above) return below;
+  return e - ET(below) <= ET(above) - e ? below : above;  // the nearest
 }
 
 // The mesh in a canonical order: vertices sorted by position, faces by their vertex indices (each
@@ -171,11 +174,18 @@ bool clean_and_check(SM& sm) {
   return sm.number_of_faces() > 0 && CGAL::is_closed(sm) && !PMP::does_self_intersect<CGAL::Parallel_if_available_tag>(sm);
 }
 
-// Exact results rounded to doubles: nearby points may merge or cross. Check, repair flat triangles,
-// or refuse.
+// Exact results rounded to doubles: nearby points may merge or cross. A needle whose two close
+// corners round to one point is gone (as if its short edge had been collapsed); flat triangles are
+// repaired; then the mesh must be closed and free of self-intersections, or it is refused.
 bool rounded_result_is_valid(Mesh& m) {
   if (m.num_faces() == 0) return true;
-  const Mesh w = welded(m);
+  Mesh w = welded(m);
+  Index kept = 0;
+  for (Index f = 0; f < w.num_faces(); ++f) {
+    const auto t = w.triangles.row(f);
+    if (t(0) != t(1) && t(1) != t(2) && t(2) != t(0)) w.triangles.row(kept++) = t;
+  }
+  w.triangles.conservativeResize(kept, 3);
   std::vector<std::string> repaired;  // non-empty: some faces could not be connected as they are
   auto sm = to_surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel>(w, "result", repaired);
   if (!repaired.empty() || !clean_and_check(sm)) return false;
