@@ -62,6 +62,8 @@ class Engine {
   // surviving vertex may go and run whenever a candidate is scored; the link condition and the
   // geometric checks run once, when a candidate reaches the top of the queue.
   Rejection structure(Index u, Index v, Freedom& freedom, bool link_condition);
+  Rejection map_wedges(Index u, Index v);
+  Index wedge_at(Index f, Index p) const;
   Rejection geometry(Index u, Index v, const Eigen::Vector3d& p);
   Rejection evaluate(Index u, Index v, Candidate& c, bool full);
   void push_edge(Index a, Index b);
@@ -260,26 +262,22 @@ void Engine::neighbours(Index p, std::vector<Index>& out) {
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
-Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condition) {
-  if (s_.has(u, kRemoved) || s_.has(v, kRemoved)) return Rejection::Topology;
-  if (s_.has(u, kLocked)) return Rejection::Locked;
-  const std::vector<Index>& fu = s_.faces_of(u);
-  shared_.clear();
-  for (Index f : fu)
-    for (int k = 0; k < 3; ++k)
-      if (s_.corner_point(f, k) == v) shared_.push_back(f);
-  if (shared_.empty() || shared_.size() > 2) return Rejection::Topology;
-  const bool border_edge = shared_.size() == 1;
-  if (s_.has(u, kBorder) && !border_edge) return Rejection::Boundary;  // u would leave its boundary
+Index Engine::wedge_at(Index f, Index p) const {
+  for (int k = 0; k < 3; ++k)
+    if (s_.corner_point(f, k) == p) return s_.face[f][k];
+  return -1;
+}
 
-  // Wedges: each wedge of u maps to v's wedge in the same vanishing face. Every wedge u still uses
-  // must be mapped, and two wedges may not merge: seams neither tear nor fuse.
-  auto wedge_at = [&](Index f, Index p) {
-    for (int k = 0; k < 3; ++k)
-      if (s_.corner_point(f, k) == p) return s_.face[f][k];
-    return Index(-1);
-  };
+// Wedges: each wedge of u maps to v's wedge in the same vanishing face (shared_). Every wedge u still
+// uses must be mapped, and two wedges may not merge: seams neither tear nor fuse.
+Rejection Engine::map_wedges(Index u, Index v) {
   s_.wedge_map_size = 0;
+  if (!s_.has(u, kSeam) && !s_.has(v, kSeam)) {
+    // One wedge each, so u's goes to v's. (A point that is no seam never becomes one: a seam point
+    // can merge only into a point with as many wedges.)
+    s_.wedge_map[s_.wedge_map_size++] = {wedge_at(shared_[0], u), wedge_at(shared_[0], v)};
+    return Rejection::None;
+  }
   for (Index f : shared_) {
     const Index wu = wedge_at(f, u), wv = wedge_at(f, v);
     bool known = false;
@@ -293,12 +291,28 @@ Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condit
     }
     if (!known) s_.wedge_map[s_.wedge_map_size++] = {wu, wv};
   }
-  for (Index f : fu) {
+  for (Index f : s_.faces_of(u)) {
     const Index wu = wedge_at(f, u);
     bool mapped = false;
     for (int i = 0; i < s_.wedge_map_size; ++i) mapped |= s_.wedge_map[i].first == wu;
     if (!mapped) return Rejection::Seam;
   }
+  return Rejection::None;
+}
+
+Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condition) {
+  if (s_.has(u, kRemoved) || s_.has(v, kRemoved)) return Rejection::Topology;
+  if (s_.has(u, kLocked)) return Rejection::Locked;
+  const std::vector<Index>& fu = s_.faces_of(u);
+  shared_.clear();
+  for (Index f : fu)
+    for (int k = 0; k < 3; ++k)
+      if (s_.corner_point(f, k) == v) shared_.push_back(f);
+  if (shared_.empty() || shared_.size() > 2) return Rejection::Topology;
+  const bool border_edge = shared_.size() == 1;
+  if (s_.has(u, kBorder) && !border_edge) return Rejection::Boundary;  // u would leave its boundary
+
+  if (const Rejection r = map_wedges(u, v); r != Rejection::None) return r;
 
   if (o_.preserve_topology && link_condition) {
     // Link condition: the only common neighbours of u and v are the apexes of the vanishing faces.
