@@ -8,6 +8,7 @@
 
 #include <random>
 
+#include "simplify/queue.h"
 #include "test_util.h"
 
 namespace lodkit {
@@ -67,6 +68,27 @@ INSTANTIATE_TEST_SUITE_P(Methods, EveryMethod,
                            std::replace(s.begin(), s.end(), '-', '_');
                            return s;
                          });
+
+TEST(QuadHeap, FilterKeepsTheOrderAndMayEmptyTheHeap) {
+  // The engine drops stale entries in bulk; what is left must pop in the same order as before.
+  std::mt19937 random(7);
+  std::uniform_int_distribution<int> value(0, 999);
+  detail::QuadHeap<int, std::less<int>> heap;
+  std::vector<int> kept;
+  for (int i = 0; i < 5000; ++i) {
+    const int x = value(random);
+    heap.push(x);
+    if (x % 3 != 0) kept.push_back(x);
+  }
+  heap.filter([](int x) { return x % 3 != 0; });
+  ASSERT_EQ(heap.size(), kept.size());
+  std::sort(kept.begin(), kept.end());
+  for (const int x : kept) EXPECT_EQ(heap.pop(), x);
+  EXPECT_TRUE(heap.empty());
+  heap.push(1), heap.push(2);
+  heap.filter([](int) { return false; });
+  EXPECT_TRUE(heap.empty());
+}
 
 TEST(Simplify, OpenMeshWithBoundaryHitsOddTargetsExactly) {
   const Mesh grid = make_grid({.divisions_x = 20, .divisions_y = 20});

@@ -82,11 +82,18 @@ class Engine {
   EngineState s_;
   std::unique_ptr<CostModel> cost_;
   QuadHeap<HeapEntry, CheaperFirst> heap_;
+  // Entries a collapse made stale, roughly (the edges at its two ends). Nine in ten pops used to be
+  // stale entries, each a full sift through a heap of millions; once they are a quarter of it, one
+  // linear pass drops them all instead.
+  std::size_t stale_estimate_ = 0;
   std::vector<std::uint32_t> version_;
   std::vector<std::uint32_t> dirty_;  // bumped when a point's neighbourhood energy changed (wide updates)
   double cos_max_turn_ = 0;
   // Scratch, reused across calls.
   std::vector<Index> shared_, ring_u_, ring_v_, ring_tmp_;
+  // The edge shared_ belongs to, while no face changes (push_edge checks both directions of one
+  // edge; the faces are the same): reset before every other use.
+  std::pair<Index, Index> shared_edge_{-1, -1};
   // Result bookkeeping.
   double max_error_ = 0;
   Index collapses_ = 0, locked_ = 0, dropped_ = 0;
@@ -125,6 +132,7 @@ void Engine::setup(const Mesh& mesh) {
                                  canonical[mesh.triangles(f, 2)]};
     const std::array<Index, 3> p{s_.point_of[w[0]], s_.point_of[w[1]], s_.point_of[w[2]]};
     s_.face.push_back(w);
+    s_.face_point.push_back(p);
     const Eigen::Vector3d n0 = (mesh.positions.row(w[1]) - mesh.positions.row(w[0]))
                                    .cross(mesh.positions.row(w[2]) - mesh.positions.row(w[0]))
                                    .transpose();
@@ -304,10 +312,13 @@ Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condit
   if (s_.has(u, kRemoved) || s_.has(v, kRemoved)) return Rejection::Topology;
   if (s_.has(u, kLocked)) return Rejection::Locked;
   const std::vector<Index>& fu = s_.faces_of(u);
-  shared_.clear();
-  for (Index f : fu)
-    for (int k = 0; k < 3; ++k)
-      if (s_.corner_point(f, k) == v) shared_.push_back(f);
+  if (const std::pair edge{std::min(u, v), std::max(u, v)}; shared_edge_ != edge) {
+    shared_.clear();
+    for (Index f : fu)
+      for (int k = 0; k < 3; ++k)
+        if (s_.corner_point(f, k) == v) shared_.push_back(f);
+    shared_edge_ = edge;
+  }
   if (shared_.empty() || shared_.size() > 2) return Rejection::Topology;
   const bool border_edge = shared_.size() == 1;
   if (s_.has(u, kBorder) && !border_edge) return Rejection::Boundary;  // u would leave its boundary
@@ -384,6 +395,7 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
 }
 
 Rejection Engine::evaluate(Index u, Index v, Candidate& c, bool full) {
+  shared_edge_ = {-1, -1};
   Freedom freedom;
   if (const Rejection r = structure(u, v, freedom, full); r != Rejection::None) return r;
   if (!cost_->score(s_, u, v, freedom, c)) return Rejection::Cost;
@@ -395,6 +407,7 @@ void Engine::push_edge(Index a, Index b) {
   // Cheap checks per direction, then the cost. When neither end is constrained both directions merge
   // into the same vertex at the same place (unless placement is at an endpoint): score one.
   Freedom fa, fb;
+  shared_edge_ = {-1, -1};
   const bool ok_a = structure(a, b, fa, false) == Rejection::None;
   const bool ok_b = structure(b, a, fb, false) == Rejection::None;
   if (!ok_a && !ok_b) return;
@@ -442,6 +455,7 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
       const Index old = s_.face[f][k];
       for (int i = 0; i < s_.wedge_map_size; ++i)
         if (s_.wedge_map[i].first == old) s_.face[f][k] = s_.wedge_map[i].second;
+      s_.face_point[f][k] = v;
       if (rec) rec->changed_corners.push_back({f, k, old});
     }
     s_.point_faces[v].push_back(f);
@@ -461,6 +475,7 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
       }
     }
   }
+  stale_estimate_ += s_.point_faces[u].size() + s_.point_faces[v].size();
   s_.point_faces[u].clear();
   s_.position[v] = c.position;
   s_.quadric[v] += s_.quadric[u];
@@ -531,6 +546,12 @@ SimplifyResult Engine::run(Index target) {
   std::optional<std::pair<Index, Index>> deferred;
   Candidate c;
   while (s_.alive_faces > target && !heap_.empty()) {
+    if (4 * stale_estimate_ > heap_.size()) {
+      // The pop order stays the same: only entries the loop below would skip are dropped.
+      heap_.filter([&](const HeapEntry& e) { return e.version == version_[e.u] + version_[e.v]; });
+      stale_estimate_ = 0;
+      if (heap_.empty()) break;
+    }
     const HeapEntry e = heap_.pop();
     if (e.version != version_[e.u] + version_[e.v]) continue;  // stale
     if (e.epoch != dirty_[e.u] + dirty_[e.v]) {  // its neighbourhood changed: score it again

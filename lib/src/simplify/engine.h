@@ -35,6 +35,7 @@ struct EngineState {
   std::vector<std::uint8_t> flags;              ///< per point: PointFlag bits
   std::vector<std::vector<Index>> point_faces;  ///< per point: incident faces (dead ones pruned lazily)
   std::vector<std::array<Index, 3>> face;       ///< wedges of each face
+  std::vector<std::array<Index, 3>> face_point; ///< points of each face (point_of[face]: one load, not two)
   std::vector<std::uint8_t> face_dead;
   std::vector<Eigen::Vector3f> face_normal0;    ///< each face's unit normal in the input
   Index alive_faces = 0;
@@ -46,7 +47,7 @@ struct EngineState {
   std::pair<Index, Index> wedge_map[2];
   int wedge_map_size = 0;
 
-  Index corner_point(Index f, int k) const { return point_of[face[f][k]]; }
+  Index corner_point(Index f, int k) const { return face_point[f][k]; }
   bool has(Index p, PointFlag flag) const { return flags[p] & flag; }
   /// Alive faces of point p (prunes dead ones from its list).
   const std::vector<Index>& faces_of(Index p);
