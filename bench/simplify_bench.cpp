@@ -59,18 +59,28 @@ int main(int argc, char** argv) {
   std::vector<std::string> inputs;
   std::string csv_path;
   Index hoppe_max_faces = 150'000;
+  const char* usage =
+      "usage: lodkit_bench_simplify [--targets 0.1,0.01] [--methods quadric,hoppe,...] [--csv FILE]\n"
+      "                             [--hoppe-max-faces N] MESH...\n";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::fputs(usage, stdout);
+      return 0;
+    }
     if (a == "--methods" && i + 1 < argc) methods = bench::split_list(argv[++i]);
     else if (a == "--targets" && i + 1 < argc) {
       targets.clear();
       for (const auto& t : bench::split_list(argv[++i])) targets.push_back(std::stod(t));
     } else if (a == "--csv" && i + 1 < argc) csv_path = argv[++i];
     else if (a == "--hoppe-max-faces" && i + 1 < argc) hoppe_max_faces = std::stoi(argv[++i]);
-    else inputs.push_back(a);
+    else if (a.starts_with("-")) {
+      std::fprintf(stderr, "lodkit_bench_simplify: unknown option or missing value: %s\n%s", a.c_str(), usage);
+      return 2;
+    } else inputs.push_back(a);
   }
   if (inputs.empty()) {
-    std::fprintf(stderr, "usage: lodkit_bench_simplify [--targets 0.1,0.01] [--methods ...] [--csv FILE] MESH...\n");
+    std::fputs(usage, stderr);
     return 2;
   }
   const fs::path work = fs::temp_directory_path() / fmt::format("lodkit-bench-simplify-{}", getpid());
