@@ -2,9 +2,10 @@
 // boolean: drop the faces in the plane, weld the seam.
 #include <lodkit/csg.h>
 
-#include <algorithm>
-#include <utility>
+#include <array>
 #include <vector>
+
+#include "core/topology.h"
 
 namespace lodkit {
 namespace {
@@ -24,30 +25,21 @@ Mesh without_faces_in_plane(const Mesh& m, int axis, double at) {
   return out;
 }
 
-// Every edge has exactly two faces, which traverse it in opposite directions.
-bool is_closed_and_oriented(const Mesh& m) {
-  std::vector<std::pair<Index, Index>> directed;
-  directed.reserve(static_cast<std::size_t>(3 * m.num_faces()));
-  for (Index f = 0; f < m.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) directed.emplace_back(m.triangles(f, k), m.triangles(f, (k + 1) % 3));
-  std::sort(directed.begin(), directed.end());
-  if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) return false;  // an edge twice one way
-  for (const auto& [a, b] : directed)
-    if (!std::binary_search(directed.begin(), directed.end(), std::pair{b, a})) return false;  // no partner
-  return true;
-}
-
 }  // namespace
 
 std::optional<Mesh> join_solids(const Mesh& below, const Mesh& above, int axis, double at) {
   if (below.num_faces() == 0) return above;
   if (above.num_faces() == 0) return below;
+  // (concatenated() drops attributes, so welding identical vertices welds equal positions.)
   Mesh joined = concatenated(without_faces_in_plane(below, axis, at), without_faces_in_plane(above, axis, at));
-  const auto same = position_classes(joined);
-  for (Index f = 0; f < joined.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) joined.triangles(f, k) = same[joined.triangles(f, k)];
+  weld_identical_vertices(joined);
   remove_unreferenced_vertices(joined);
-  if (joined.num_faces() == 0 || !is_closed_and_oriented(joined)) return std::nullopt;
+  // Closed and consistently oriented: every edge has two faces that traverse it in opposite directions.
+  std::vector<std::array<Index, 3>> faces(static_cast<std::size_t>(joined.num_faces()));
+  for (Index f = 0; f < joined.num_faces(); ++f) faces[f] = {joined.triangles(f, 0), joined.triangles(f, 1), joined.triangles(f, 2)};
+  if (faces.empty()) return std::nullopt;
+  for (const detail::EdgeUse& e : detail::classify_edges(faces))
+    if (e.faces != 2 || !e.consistent) return std::nullopt;
   return joined;
 }
 

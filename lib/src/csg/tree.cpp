@@ -170,7 +170,6 @@ bool have_disjoint_boxes(const std::vector<Mesh>& parts) {
 struct SeparatingPlane {
   int axis = 0;
   double at = 0.0;
-  std::size_t below = 0;  // parts on the low side
 };
 
 // Where to cut inside the open interval (lo, hi): in the widest stretch free of the solid's vertex
@@ -217,7 +216,7 @@ std::optional<SeparatingPlane> separating_plane(const Mesh& solid, const std::ve
       if (best == 0 || imbalance(k) < imbalance(best)) best = k, best_lo = lo, best_hi = hi;
     }
     if (best == 0) continue;
-    if (const auto at = cut_position(solid, axis, best_lo, best_hi)) return SeparatingPlane{axis, *at, best};
+    if (const auto at = cut_position(solid, axis, best_lo, best_hi)) return SeparatingPlane{axis, *at};
   }
   return std::nullopt;
 }

@@ -61,6 +61,9 @@ class Engine {
   // Checks are split by cost: the cheap ones (flags, shared faces, seam wedges) decide where the
   // surviving vertex may go and run whenever a candidate is scored; the link condition and the
   // geometric checks run once, when a candidate reaches the top of the queue.
+  /// The faces on edge uv, into shared_ (in u's face order, which the wedge map follows).
+  void find_shared_faces(Index u, Index v);
+  /// Expects shared_ filled for this edge by find_shared_faces().
   Rejection structure(Index u, Index v, Freedom& freedom, bool link_condition);
   Rejection map_wedges(Index u, Index v);
   Index wedge_at(Index f, Index p) const;
@@ -91,9 +94,6 @@ class Engine {
   double cos_max_turn_ = 0;
   // Scratch, reused across calls.
   std::vector<Index> shared_, ring_u_, ring_v_, ring_tmp_;
-  // The edge shared_ belongs to, while no face changes (push_edge checks both directions of one
-  // edge; the faces are the same): reset before every other use.
-  std::pair<Index, Index> shared_edge_{-1, -1};
   // Result bookkeeping.
   double max_error_ = 0;
   Index collapses_ = 0, locked_ = 0, dropped_ = 0;
@@ -308,17 +308,17 @@ Rejection Engine::map_wedges(Index u, Index v) {
   return Rejection::None;
 }
 
+void Engine::find_shared_faces(Index u, Index v) {
+  shared_.clear();
+  for (Index f : s_.faces_of(u))
+    for (int k = 0; k < 3; ++k)
+      if (s_.corner_point(f, k) == v) shared_.push_back(f);
+}
+
 Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condition) {
   if (s_.has(u, kRemoved) || s_.has(v, kRemoved)) return Rejection::Topology;
   if (s_.has(u, kLocked)) return Rejection::Locked;
   const std::vector<Index>& fu = s_.faces_of(u);
-  if (const std::pair edge{std::min(u, v), std::max(u, v)}; shared_edge_ != edge) {
-    shared_.clear();
-    for (Index f : fu)
-      for (int k = 0; k < 3; ++k)
-        if (s_.corner_point(f, k) == v) shared_.push_back(f);
-    shared_edge_ = edge;
-  }
   if (shared_.empty() || shared_.size() > 2) return Rejection::Topology;
   const bool border_edge = shared_.size() == 1;
   if (s_.has(u, kBorder) && !border_edge) return Rejection::Boundary;  // u would leave its boundary
@@ -395,7 +395,7 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
 }
 
 Rejection Engine::evaluate(Index u, Index v, Candidate& c, bool full) {
-  shared_edge_ = {-1, -1};
+  find_shared_faces(u, v);
   Freedom freedom;
   if (const Rejection r = structure(u, v, freedom, full); r != Rejection::None) return r;
   if (!cost_->score(s_, u, v, freedom, c)) return Rejection::Cost;
@@ -407,7 +407,7 @@ void Engine::push_edge(Index a, Index b) {
   // Cheap checks per direction, then the cost. When neither end is constrained both directions merge
   // into the same vertex at the same place (unless placement is at an endpoint): score one.
   Freedom fa, fb;
-  shared_edge_ = {-1, -1};
+  find_shared_faces(a, b);  // the same faces for both directions
   const bool ok_a = structure(a, b, fa, false) == Rejection::None;
   const bool ok_b = structure(b, a, fb, false) == Rejection::None;
   if (!ok_a && !ok_b) return;
