@@ -92,6 +92,17 @@ double set_distance(const Mesh& mesh, const std::vector<Eigen::Vector3d>& expect
   return worst;
 }
 
+/// A stencil table (refinement or limit) applied to the control mesh's positions.
+template <typename Table>
+std::vector<Eigen::Vector3d> applied(const Table& table, const Mesh& control) {
+  const std::vector<Point> cvs = control_points(control);
+  std::vector<Point> values(static_cast<std::size_t>(table.GetNumStencils()));
+  table.UpdateValues(cvs.data(), values.data());
+  std::vector<Eigen::Vector3d> out;
+  for (const Point& p : values) out.emplace_back(p.v[0], p.v[1], p.v[2]);
+  return out;
+}
+
 /// Limit positions at the (i / n, j / n) lattice of every ptex face (quads: the full square;
 /// triangles: i + j <= n), from OpenSubdiv's limit stencils over an adaptively refined copy.
 std::vector<Eigen::Vector3d> limit_lattice(const Mesh& control, const std::vector<int>& sizes,
@@ -120,12 +131,7 @@ std::vector<Eigen::Vector3d> limit_lattice(const Mesh& control, const std::vecto
   options.generate1stDerivatives = false;
   std::unique_ptr<const Far::LimitStencilTableReal<double>> table(
       Far::LimitStencilTableFactoryReal<double>::Create(*refiner, locations, nullptr, nullptr, options));
-  const std::vector<Point> cvs = control_points(control);
-  std::vector<Point> limit(static_cast<std::size_t>(table->GetNumStencils()));
-  table->UpdateValues(cvs.data(), limit.data());
-  std::vector<Eigen::Vector3d> out;
-  for (const Point& p : limit) out.emplace_back(p.v[0], p.v[1], p.v[2]);
-  return out;
+  return applied(*table, control);
 }
 
 /// Points of uniform level `levels` from OpenSubdiv's refinement stencils.
@@ -138,12 +144,7 @@ std::vector<Eigen::Vector3d> refined_points(const Mesh& control, const std::vect
   options.generateOffsets = true;
   std::unique_ptr<const Far::StencilTableReal<double>> table(
       Far::StencilTableFactoryReal<double>::Create(*refiner, options));
-  const std::vector<Point> cvs = control_points(control);
-  std::vector<Point> refined(static_cast<std::size_t>(table->GetNumStencils()));
-  table->UpdateValues(cvs.data(), refined.data());
-  std::vector<Eigen::Vector3d> out;
-  for (const Point& p : refined) out.emplace_back(p.v[0], p.v[1], p.v[2]);
-  return out;
+  return applied(*table, control);
 }
 
 TEST(Subdivide, CatmullClarkCubeMatchesOpenSubdivStencils) {
