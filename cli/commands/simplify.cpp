@@ -23,7 +23,7 @@ struct SimplifyCliOptions {
   std::optional<std::string> max_error;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
   bool measure = false, json = false;
-  double max_normal_change = 60.0;
+  double max_normal_change = 60.0, crease_weight = 5.0;
   std::vector<double> attribute_weights;
   double feature_angle = 30.0, aspect_ratio = 0.1;
   bool accumulate_error = false;
@@ -95,6 +95,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   if (o.preserve_boundary) s.boundary_weight = 1000.0;
   s.preserve_topology = !o.allow_topology_change;
   s.max_normal_change_deg = o.max_normal_change;
+  s.crease_weight = o.crease_weight;
   if (!o.attribute_weights.empty()) {
     if (o.attribute_weights.size() != 3)
       throw Error("simplify: --attribute-weights takes three numbers: normals,uvs,colours");
@@ -167,6 +168,9 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                 "Skip the link condition and flip checks (shows how naive methods fail)");
   sub->add_option("--max-normal-change", opt->max_normal_change, "Largest turn of a face in one collapse (degrees)")
       ->check(CLI::Range(1.0, 180.0))->capture_default_str();
+  sub->add_option("--crease-weight", opt->crease_weight,
+                  "Weight of the planes that keep thin fins, spikes and sharp ridges (quadric; 0 = off)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_option("--attribute-weights", opt->attribute_weights,
                   "Weights of normal, UV and colour error against geometry, e.g. 0.5,1,1 (quadric; default off)")
       ->delimiter(',')->check(CLI::NonNegativeNumber);

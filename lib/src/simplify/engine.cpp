@@ -58,6 +58,7 @@ class Engine {
  private:
   void setup(const Mesh& mesh);
   void setup_attributes(const Mesh& mesh);
+  void add_crease_planes();
   // Checks are split by cost: the cheap ones (flags, shared faces, seam wedges) decide where the
   // surviving vertex may go and run whenever a candidate is scored; the link condition and the
   // geometric checks run once, when a candidate reaches the top of the queue.
@@ -171,7 +172,7 @@ void Engine::setup(const Mesh& mesh) {
   }
 
   // Quadrics: area-weighted face planes, and boundary constraint planes through each border edge,
-  // perpendicular to its face, weighted by the squared edge length.
+  // perpendicular to its face, weighted by the squared edge length; then the crease planes.
   for (Index f = 0; f < mesh.num_faces(); ++f) {
     if (s_.face_dead[f]) continue;
     const Index a = s_.corner_point(f, 0), b = s_.corner_point(f, 1), c = s_.corner_point(f, 2);
@@ -193,6 +194,41 @@ void Engine::setup(const Mesh& mesh) {
       if (!m.allFinite()) continue;
       const Quadric bq = Quadric::plane(m, -m.dot(s_.position[p0]), o_.boundary_weight * edge.squaredNorm());
       s_.quadric[p0] += bq, s_.quadric[p1] += bq;
+    }
+  }
+  add_crease_planes();
+}
+
+// Crease planes: the boundary constraint generalised to folded edges. Face planes alone leave a
+// thin fin's rim, or a spike's tip, free to slide inwards at almost no cost (the planes of both
+// sides contain that direction), which is where plain quadrics lose Hausdorff distance. Each interior
+// edge adds the plane through it whose normal bisects its faces' normals, weighted by
+// crease_weight * |edge|^2 * (1 - n1.n2) / 2: nothing on flat ground, the full weight on a fin whose
+// sides fold back onto each other (n2 = -n1, where the plane is a boundary plane).
+void Engine::add_crease_planes() {
+  if (!(o_.crease_weight > 0)) return;
+  const Index faces = static_cast<Index>(s_.face.size());
+  for (Index f = 0; f < faces; ++f) {
+    if (s_.face_dead[f]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
+      Index other = -1;
+      int uses = 0;
+      for (Index g : s_.point_faces[p1])  // faces across p0 -> p1 run p1 -> p0 when oriented alike
+        for (int j = 0; j < 3; ++j)
+          if (s_.corner_point(g, j) == p0) {
+            ++uses;
+            if (s_.corner_point(g, (j + 1) % 3) != p1) other = g;
+          }
+      if (uses != 2 || other < f) continue;  // border, non-manifold, misoriented, or seen from `other`
+      const Eigen::Vector3d n1 = s_.face_normal0[f].cast<double>(), n2 = s_.face_normal0[other].cast<double>();
+      const double fold = 0.5 * (1.0 - n1.dot(n2));
+      const Eigen::Vector3d m = (n1 + n2).normalized();
+      if (!(fold > 1e-6) || !m.allFinite()) continue;
+      const Eigen::Vector3d& a = s_.position[p0];
+      const double weight = o_.crease_weight * fold * (s_.position[p1] - a).squaredNorm();
+      const Quadric q = Quadric::plane(m, -m.dot(a), weight);
+      s_.quadric[p0] += q, s_.quadric[p1] += q;
     }
   }
 }
