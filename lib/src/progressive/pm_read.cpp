@@ -318,9 +318,12 @@ bool decode_block(std::string_view payload, const Header& h, StreamState& st, Pr
       c[ps] = st.point_first_wedge[s] + static_cast<Index>(ws);
       c[px] = st.point_first_wedge[x] + static_cast<Index>(wx);
     }
+    const std::vector<char> predicted =
+        h.version >= 2 ? predicted_moves(st, rec) : std::vector<char>(st.point_faces[static_cast<std::size_t>(s)].size(), 0);
+    std::size_t face_index = 0;
     for (Index f : st.point_faces[static_cast<std::size_t>(s)]) {
       if (!in[kChangeBit].next(v) || v > 1) return bad("bad corner bits");
-      if (!v) continue;
+      if (!(v ^ static_cast<std::uint32_t>(predicted[face_index++] != 0))) continue;
       const int k = st.corner_of(f, s);
       std::uint32_t which = 0;
       if (k < 0 || !in[kChangeWedge].next(which)) return bad("bad moved corner");

@@ -92,10 +92,12 @@ bool decode_header(const char* bytes, Header& h, std::string& why) {
   ByteReader r(bytes + sizeof kMagic, kHeaderSize - sizeof kMagic);
   std::uint16_t version = 0;
   r.get(version);
-  if (version != kVersion) {
-    why = "unsupported .pm version " + std::to_string(version) + " (this reader knows " + std::to_string(kVersion) + ")";
+  if (version < kOldestVersion || version > kVersion) {
+    why = "unsupported .pm version " + std::to_string(version) + " (this reader knows " + std::to_string(kOldestVersion) +
+          " to " + std::to_string(kVersion) + ")";
     return false;
   }
+  h.version = version;
   r.get(h.flags);
   r.get(h.position_bits), r.get(h.normal_bits), r.get(h.uv_bits), r.get(h.colour_bits);
   for (std::uint32_t* v : {&h.points, &h.wedges, &h.faces, &h.base_points, &h.base_wedges, &h.base_faces, &h.splits,
@@ -224,6 +226,58 @@ PredictionRings prediction_rings(const StreamState& st, const SplitRecord& r) {
     ring->erase(std::unique(ring->begin(), ring->end()), ring->end());
   }
   return rings;
+}
+
+std::vector<char> predicted_moves(const StreamState& st, const SplitRecord& r) {
+  const Index s = r.point, t = st.num_points();
+  const std::vector<Index>& faces = st.point_faces[static_cast<std::size_t>(s)];
+  std::vector<char> moved(faces.size(), 0);
+  // Where the moving arc starts and ends: a new face (s, x, t) in counter-clockwise order spans x -> t
+  // around s, so x starts the arc; (s, t, x) ends it at x.
+  Index start = -1, end = -1;
+  for (Index i = 0; i < r.num_faces; ++i) {
+    const auto& c = r.faces[static_cast<std::size_t>(i)];
+    for (int k = 0; k < 3; ++k) {
+      if (point_before(st, c[k], t) != s) continue;
+      const Index next = point_before(st, c[(k + 1) % 3], t), after = point_before(st, c[(k + 2) % 3], t);
+      if (after == t) start = next;
+      else if (next == t) end = after;
+    }
+  }
+  // s's faces as (s, a, b) counter-clockwise: a face spans a -> b around s.
+  auto span = [&](std::size_t i) {
+    const auto& c = st.corners[static_cast<std::size_t>(faces[i])];
+    const int k = st.corner_of(faces[i], s);
+    return std::pair{st.wedge_point[static_cast<std::size_t>(c[(k + 1) % 3])], st.wedge_point[static_cast<std::size_t>(c[(k + 2) % 3])]};
+  };
+  auto find = [&](Index p, bool from) -> std::ptrdiff_t {
+    std::ptrdiff_t hit = -1;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      const auto [a, b] = span(i);
+      if ((from ? a : b) == p) {
+        if (hit >= 0) return -2;  // not a simple fan: no prediction
+        hit = static_cast<std::ptrdiff_t>(i);
+      }
+    }
+    return hit;
+  };
+  // Walk counter-clockwise from `start` to `end`, or from the one known end to the border.
+  const bool forward = start >= 0;
+  Index at = forward ? start : end;
+  if (at < 0) return moved;
+  for (std::size_t steps = 0; steps < faces.size(); ++steps) {
+    if (at == (forward ? end : start) && steps > 0) return moved;
+    const std::ptrdiff_t i = find(at, forward);
+    if (i == -2) return std::vector<char>(faces.size(), 0);
+    if (i < 0) break;  // reached the border
+    moved[static_cast<std::size_t>(i)] = 1;
+    const auto [a, b] = span(static_cast<std::size_t>(i));
+    at = forward ? b : a;
+  }
+  // Only a walk that ends where the other new face says (or at the border, with one new face) is a prediction.
+  const bool closed = start >= 0 && end >= 0;
+  if (closed && at != end) return std::vector<char>(faces.size(), 0);
+  return moved;
 }
 
 std::array<std::int64_t, 3> ring_centroid(const StreamState& st, const std::vector<Index>& ring,

@@ -19,7 +19,8 @@ namespace lodkit::detail::pm {
 static_assert(std::endian::native == std::endian::little, "the .pm codec assumes a little-endian host");
 
 inline constexpr char kMagic[8] = {'L', 'K', 'P', 'M', '\r', '\n', '\x1a', '\n'};
-inline constexpr std::uint16_t kVersion = 1;
+inline constexpr std::uint16_t kVersion = 2;  // 2: moved-corner bits against the fan prediction
+inline constexpr std::uint16_t kOldestVersion = 1;
 inline constexpr std::size_t kHeaderSize = 100;  // including its CRC
 
 enum Flag : std::uint16_t {
@@ -118,6 +119,7 @@ double error_value(std::uint16_t code, double reference);
 
 /// The header's fields.
 struct Header {
+  std::uint16_t version = kVersion;
   std::uint16_t flags = 0;
   std::uint8_t position_bits = 0, normal_bits = 0, uv_bits = 0, colour_bits = 0;
   std::uint32_t points = 0, wedges = 0, faces = 0, base_points = 0, base_wedges = 0, base_faces = 0, splits = 0;
@@ -182,7 +184,7 @@ enum Stream {
   kWedgeIndex,            // per new face: new, split and third corner's wedge within its point
   kThird,                 // per new face: the third point as an index into the split point's ring
   kEscape,                // values that did not fit the predictions (raw)
-  kChangeBit,             // per face of the split point: does its corner move to the new point
+  kChangeBit,             // per face of the split point: does its corner move, XOR the fan prediction
   kChangeWedge,           // per moved corner: 0 = the wedge paired in the new faces, else 1 + index
   kResidualNew,           // quantised: new point minus the split point's coarse position
   kResidualSplit,         // quantised: split point's fine position minus its prediction
@@ -227,6 +229,11 @@ struct PredictionRings {
   std::vector<Index> new_point, split_point;
 };
 PredictionRings prediction_rings(const StreamState& st, const SplitRecord& r);
+/// Which faces of the split point (in its face order) the new faces say will move to the new point:
+/// the fan between the two new faces' third points, counter-clockwise, or from the one new face to
+/// the border. All zero where the fan is not simple. Asked before the split is applied, once the new
+/// faces are known; the stream's moved-corner bits are the true bits XOR these (version 2 on).
+std::vector<char> predicted_moves(const StreamState& st, const SplitRecord& r);
 /// The rounded centroid of the ring's quantised positions and `partner`.
 std::array<std::int64_t, 3> ring_centroid(const StreamState& st, const std::vector<Index>& ring,
                                           const std::array<std::int64_t, 3>& partner);

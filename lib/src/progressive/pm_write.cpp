@@ -184,9 +184,11 @@ SplitRecord code_split(const ProgressiveMesh& pm, std::size_t j, const StreamSta
   }
   // Moved corners: one bit per face of s, in face order.
   const CornerChange* changes = pm.corner_changes.data() + vs.first_change;
+  const std::vector<char> predicted = predicted_moves(st, r);
+  std::size_t face_index = 0;
   for (Index f : st.point_faces[static_cast<std::size_t>(s)]) {
     const CornerChange* c = std::find_if(changes, changes + vs.num_changes, [&](const CornerChange& x) { return x.corner / 3 == f; });
-    out[kChangeBit].push_back(c != changes + vs.num_changes);
+    out[kChangeBit].push_back((c != changes + vs.num_changes) != (predicted[face_index++] != 0));
     if (c == changes + vs.num_changes) continue;
     r.changes.push_back({f, st.corner_of(f, s), c->fine_wedge});
     const Index paired = paired_fine_wedge(r, st, c->coarse_wedge);
