@@ -63,7 +63,7 @@ struct SimplifyOptions {
   bool preserve_topology = true;   ///< link condition and flip checks (off only to show failure)
   bool lock_boundary = false;      ///< boundary vertices never move or disappear
   double boundary_weight = 10.0;   ///< weight of boundary constraint planes (quadric); higher keeps borders
-  /// Weight of crease planes (quadric): planes through folded edges that keep thin fins, spikes and
+  /// Weight of crease planes (quadric method only): planes through folded edges that keep thin fins, spikes and
   /// sharp ridges from sliding inwards; a fully folded edge weighs like a border edge at 10. 0 = off.
   double crease_weight = 5.0;
   double max_normal_change_deg = 60.0;  ///< how far a face may turn, in one collapse and in all

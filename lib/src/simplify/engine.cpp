@@ -206,7 +206,9 @@ void Engine::setup(const Mesh& mesh) {
 // crease_weight * |edge|^2 * (1 - n1.n2) / 2: nothing on flat ground, the full weight on a fin whose
 // sides fold back onto each other (n2 = -n1, where the plane is a boundary plane).
 void Engine::add_crease_planes() {
-  if (!(o_.crease_weight > 0)) return;
+  // Quadric only: hoppe starts from the quadric's position but measures its own energy, and it kept
+  // less Hausdorff with them (horse 10 %: 0.28 % against 0.14 %).
+  if (o_.method != SimplifyMethod::Quadric || !(o_.crease_weight > 0)) return;
   const Index faces = static_cast<Index>(s_.face.size());
   for (Index f = 0; f < faces; ++f) {
     if (s_.face_dead[f]) continue;
