@@ -23,7 +23,7 @@ struct SimplifyCliOptions {
   std::optional<std::string> max_error;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
   bool measure = false, json = false;
-  double max_normal_change = 60.0, crease_weight = 5.0;
+  double max_normal_change = SimplifyOptions{}.max_normal_change_deg, crease_weight = SimplifyOptions{}.crease_weight;
   std::vector<double> attribute_weights;
   double feature_angle = 30.0, aspect_ratio = 0.1;
   bool accumulate_error = false;

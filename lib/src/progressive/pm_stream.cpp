@@ -245,20 +245,19 @@ std::vector<char> predicted_moves(const StreamState& st, const SplitRecord& r) {
     }
   }
   // s's faces as (s, a, b) counter-clockwise: a face spans a -> b around s.
-  auto span = [&](std::size_t i) {
+  std::vector<std::pair<Index, Index>> spans(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) {
     const auto& c = st.corners[static_cast<std::size_t>(faces[i])];
     const int k = st.corner_of(faces[i], s);
-    return std::pair{st.wedge_point[static_cast<std::size_t>(c[(k + 1) % 3])], st.wedge_point[static_cast<std::size_t>(c[(k + 2) % 3])]};
-  };
+    spans[i] = {st.wedge_point[static_cast<std::size_t>(c[(k + 1) % 3])], st.wedge_point[static_cast<std::size_t>(c[(k + 2) % 3])]};
+  }
   auto find = [&](Index p, bool from) -> std::ptrdiff_t {
     std::ptrdiff_t hit = -1;
-    for (std::size_t i = 0; i < faces.size(); ++i) {
-      const auto [a, b] = span(i);
-      if ((from ? a : b) == p) {
+    for (std::size_t i = 0; i < spans.size(); ++i)
+      if ((from ? spans[i].first : spans[i].second) == p) {
         if (hit >= 0) return -2;  // not a simple fan: no prediction
         hit = static_cast<std::ptrdiff_t>(i);
       }
-    }
     return hit;
   };
   // Walk counter-clockwise from `start` to `end`, or from the one known end to the border.
@@ -271,8 +270,7 @@ std::vector<char> predicted_moves(const StreamState& st, const SplitRecord& r) {
     if (i == -2) return std::vector<char>(faces.size(), 0);
     if (i < 0) break;  // reached the border
     moved[static_cast<std::size_t>(i)] = 1;
-    const auto [a, b] = span(static_cast<std::size_t>(i));
-    at = forward ? b : a;
+    at = forward ? spans[static_cast<std::size_t>(i)].second : spans[static_cast<std::size_t>(i)].first;
   }
   // Only a walk that ends where the other new face says (or at the border, with one new face) is a prediction.
   const bool closed = start >= 0 && end >= 0;

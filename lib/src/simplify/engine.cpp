@@ -185,10 +185,8 @@ void Engine::setup(const Mesh& mesh) {
     for (int k = 0; k < 3; ++k) {
       const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
       if (!(s_.has(p0, kBorder) && s_.has(p1, kBorder))) continue;
-      int uses = 0;  // is p0-p1 a boundary edge (one face)?
-      for (Index g : s_.point_faces[p0])
-        for (int j = 0; j < 3; ++j) uses += s_.corner_point(g, j) == p1;
-      if (uses != 1) continue;
+      find_shared_faces(p0, p1);
+      if (shared_.size() != 1) continue;  // not a boundary edge
       const Eigen::Vector3d edge = s_.position[p1] - s_.position[p0];
       const Eigen::Vector3d m = edge.cross(n).normalized();
       if (!m.allFinite()) continue;
@@ -214,15 +212,13 @@ void Engine::add_crease_planes() {
     if (s_.face_dead[f]) continue;
     for (int k = 0; k < 3; ++k) {
       const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
-      Index other = -1;
-      int uses = 0;
-      for (Index g : s_.point_faces[p1])  // faces across p0 -> p1 run p1 -> p0 when oriented alike
-        for (int j = 0; j < 3; ++j)
-          if (s_.corner_point(g, j) == p0) {
-            ++uses;
-            if (s_.corner_point(g, (j + 1) % 3) != p1) other = g;
-          }
-      if (uses != 2 || other < f) continue;  // border, non-manifold, misoriented, or seen from `other`
+      find_shared_faces(p0, p1);
+      if (shared_.size() != 2) continue;  // border or non-manifold
+      const Index other = shared_[0] == f ? shared_[1] : shared_[0];
+      if (other < f) continue;  // seen from `other` already
+      int j = 0;
+      while (s_.corner_point(other, j) != p0) ++j;
+      if (s_.corner_point(other, (j + 1) % 3) == p1) continue;  // misoriented: `other` also runs p0 -> p1
       const Eigen::Vector3d n1 = s_.face_normal0[f].cast<double>(), n2 = s_.face_normal0[other].cast<double>();
       const double fold = 0.5 * (1.0 - n1.dot(n2));
       const Eigen::Vector3d m = (n1 + n2).normalized();
