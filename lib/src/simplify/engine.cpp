@@ -523,7 +523,10 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
   std::vector<Index> ring;
   neighbours(v, ring);
   // Edges at v are re-scored now; with a wide update, edges at v's neighbours are marked and
-  // re-scored when they reach the top of the queue.
+  // re-scored when they reach the top of the queue. (Queueing v's edges at their last cost instead,
+  // scored only when that reaches the top, made hoppe 35 % faster on the bunny but cost accuracy:
+  // Hausdorff 0.249 -> 0.321 %, RMS 0.0210 -> 0.0216 % at 10 %, and a flipped face in the tests. A
+  // collapse can lower its neighbours' costs, so their last cost is no lower bound.)
   if (cost_->wide_update())
     for (Index w : ring) ++dirty_[w];
   for (Index w : ring) push_edge(v, w);
