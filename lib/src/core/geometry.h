@@ -8,7 +8,7 @@ namespace lodkit::detail {
 
 /// Closest point to `p` on triangle (a, b, c); robust for degenerate triangles (Ericson, RTCD 5.1.5).
 inline Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                          const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+                                                 const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   // Voronoi-region walk: vertex regions, then edge regions, then the interior.
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);

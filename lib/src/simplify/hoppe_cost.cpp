@@ -95,7 +95,7 @@ class HoppeCost final : public CostModel {
         }
         tri_.push_back(tri);
       }
-      // (Projecting in parallel did not pay: a neighbourhood holds 50-150 points, a few microseconds.)
+      // (Projecting in parallel did not pay: a neighbourhood holds 50-300 points, a few microseconds.)
       for (std::size_t j = 0; j < points_.size(); ++j) {
         const Nearest n = nearest(point_[points_[j]], home_[j], p, solve);
         const double weight = weight_[j];
@@ -156,20 +156,20 @@ class HoppeCost final : public CostModel {
 
   // The nearest point to x on the new star (merged vertex at p). The triangle x's face becomes (`home`)
   // is nearly always the nearest, so it goes first and its distance rules out nearly every other one.
-  Nearest nearest(const Eigen::Vector3d& x, int home, const Eigen::Vector3d& p, bool solve) const {
-    std::size_t first = 0;
-    if (home >= 0) {
-      first = std::size_t(home);
-    } else {
-      double lowest = INFINITY;
+  // A point of a vanishing face has no home: the triangle with the lowest bound goes first, and the
+  // bounds computed to find it are the ones the loop checks.
+  Nearest nearest(const Eigen::Vector3d& x, int home, const Eigen::Vector3d& p, bool solve) {
+    std::size_t first = home >= 0 ? std::size_t(home) : 0;
+    if (home < 0) {
+      bound2_.resize(tri_.size());
       for (std::size_t k = 0; k < tri_.size(); ++k)
-        if (const double b = bound2(tri_[k], x); b < lowest) lowest = b, first = k;
+        if ((bound2_[k] = bound2(tri_[k], x)) < bound2_[first]) first = k;
     }
     Nearest out{INFINITY, 0.0, Eigen::Vector3d::Zero()};
     for (std::size_t n = 0; n < tri_.size(); ++n) {
       const std::size_t k = n == 0 ? first : n == first ? 0 : n;
       const Tri& t = tri_[k];
-      if (n > 0 && bound2(t, x) >= out.d2) continue;
+      if (n > 0 && (home < 0 ? bound2_[k] : bound2(t, x)) >= out.d2) continue;
       const Eigen::Vector3d q = closest_point_on_triangle(x, t.c[0], t.c[1], t.c[2]);
       const double d = (q - x).squaredNorm();
       if (d >= out.d2) continue;
@@ -284,6 +284,7 @@ class HoppeCost final : public CostModel {
   std::size_t point_count_ = 0;
   std::vector<std::array<Index, 3>> star_;
   std::vector<Tri> tri_;
+  std::vector<double> bound2_;  ///< nearest()'s bounds for a point without a home triangle
   struct Projection {
     Index point;
     double weight, b;
