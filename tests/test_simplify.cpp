@@ -69,6 +69,26 @@ INSTANTIATE_TEST_SUITE_P(Methods, EveryMethod,
                            return s;
                          });
 
+TEST(Simplify, OneFaceLeftTakesABoundaryEdgeOrLandsOneBelow) {
+  // A collapse removes two faces, or one on a boundary edge. With an odd number to remove, an open
+  // mesh still lands exactly on the target; a closed one lands one below it.
+  for (const Index target : {601, 333, 75}) {
+    SCOPED_TRACE(target);
+    SimplifyOptions o;
+    o.target_faces = target;
+    const Mesh grid = make_grid({.divisions_x = 30, .divisions_y = 20});  // 1,200 faces, open
+    const SimplifyResult open = simplify(grid, o);
+    EXPECT_EQ(open.reason, StopReason::TargetReached);
+    EXPECT_EQ(open.faces_out, target);
+    EXPECT_EQ(inspect(open.mesh).boundary_loops, 1);
+    const Mesh sphere = make_uv_sphere({.segments = 32, .rings = 16});  // closed
+    const SimplifyResult closed = simplify(sphere, o);
+    EXPECT_EQ(closed.reason, StopReason::TargetReached);
+    EXPECT_EQ(closed.faces_out, target - 1);
+    EXPECT_TRUE(inspect(closed.mesh).manifold);
+  }
+}
+
 TEST(QuadHeap, FilterKeepsTheOrderAndMayEmptyTheHeap) {
   // The engine drops stale entries in bulk; what is left must pop in the same order as before.
   std::mt19937 random(7);
