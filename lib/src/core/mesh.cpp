@@ -96,27 +96,37 @@ void remap_vertices(Mesh& mesh, const std::vector<Index>& new_of_old, Index new_
 std::vector<Index> identical_vertex_classes(const Mesh& mesh) {
   const Index n = mesh.num_vertices();
   const Attributes& a = mesh.attributes;
-  // A vertex record: position then every attribute present, compared bit for bit.
-  auto record = [&](Index v) {
-    std::vector<double> r{mesh.positions(v, 0) + 0.0, mesh.positions(v, 1) + 0.0,
-                          mesh.positions(v, 2) + 0.0};
-    for (int k = 0; k < a.normals.cols() && a.normals.rows(); ++k) r.push_back(a.normals(v, k));
-    for (int k = 0; k < a.uvs.cols() && a.uvs.rows(); ++k) r.push_back(a.uvs(v, k));
-    for (int k = 0; k < a.colours.cols() && a.colours.rows(); ++k) r.push_back(a.colours(v, k));
-    return r;
+  // A vertex record: position then every attribute present, one flat array of ordered keys (a vector
+  // per vertex cost an allocation each). Keys compare like the values, with -0 equal to +0 and every
+  // NaN equal to every other, so the sort sees a strict order whatever the input holds.
+  auto key = [](double x) {
+    const std::uint64_t b = x != x ? 0x7ff8000000000000ULL : detail::bits_of(x);
+    return b >> 63 ? ~b : b | (1ULL << 63);
   };
+  const auto width = [](const auto& m) { return m.rows() ? static_cast<std::size_t>(m.cols()) : 0u; };
+  const std::size_t k = 3 + width(a.normals) + width(a.uvs) + width(a.colours);
+  std::vector<std::uint64_t> records(k * static_cast<std::size_t>(n));
+  for (Index v = 0; v < n; ++v) {
+    std::uint64_t* r = &records[k * static_cast<std::size_t>(v)];
+    for (int d = 0; d < 3; ++d) *r++ = key(mesh.positions(v, d));
+    for (std::size_t d = 0; d < width(a.normals); ++d) *r++ = key(a.normals(v, d));
+    for (std::size_t d = 0; d < width(a.uvs); ++d) *r++ = key(a.uvs(v, d));
+    for (std::size_t d = 0; d < width(a.colours); ++d) *r++ = key(a.colours(v, d));
+  }
+  auto row = [&](Index v) { return records.begin() + static_cast<std::ptrdiff_t>(k * static_cast<std::size_t>(v)); };
+  auto same = [&](Index i, Index j) { return std::equal(row(i), row(i) + k, row(j)); };
   std::vector<Index> order(static_cast<std::size_t>(n));
   std::iota(order.begin(), order.end(), 0);
-  std::vector<std::vector<double>> records(static_cast<std::size_t>(n));
-  for (Index v = 0; v < n; ++v) records[v] = record(v);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](Index i, Index j) { return records[i] < records[j]; });
-  // Each group of equal records maps to its lowest index (stable sort: the group's first).
+  // Equal records end up together, lowest index first.
+  std::sort(order.begin(), order.end(), [&](Index i, Index j) {
+    const auto [x, y] = std::mismatch(row(i), row(i) + k, row(j));
+    return x != row(i) + k ? *x < *y : i < j;
+  });
   std::vector<Index> representative(static_cast<std::size_t>(n));
   for (std::size_t i = 0; i < order.size();) {
     std::size_t j = i;
-    while (j < order.size() && records[order[j]] == records[order[i]]) ++j;
-    for (std::size_t k = i; k < j; ++k) representative[order[k]] = order[i];
+    while (j < order.size() && same(order[j], order[i])) ++j;
+    for (std::size_t m = i; m < j; ++m) representative[order[m]] = order[i];
     i = j;
   }
   return representative;

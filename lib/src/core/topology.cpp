@@ -7,27 +7,37 @@
 namespace lodkit::detail {
 
 std::vector<EdgeUse> classify_edges(const std::vector<std::array<Index, 3>>& faces) {
+  // Half-edges bucketed by their lower end (a counting sort), then each small bucket sorted by the
+  // other end: linear, where one sort of all 3F half-edges was a fifth of a 1M-face simplify's setup.
+  Index points = 0;
+  for (const auto& f : faces) points = std::max({points, f[0] + 1, f[1] + 1, f[2] + 1});
+  std::vector<Index> start(static_cast<std::size_t>(points) + 1, 0);
+  for (const auto& f : faces)
+    for (int k = 0; k < 3; ++k) ++start[std::min(f[k], f[(k + 1) % 3]) + 1];
+  for (Index v = 0; v < points; ++v) start[v + 1] += start[v];
   struct HalfEdge {
-    Index lo, hi;
-    bool forward;
+    Index hi;
+    bool forward;  // runs lo -> hi
   };
-  std::vector<HalfEdge> half;
-  half.reserve(3 * faces.size());
+  std::vector<HalfEdge> half(static_cast<std::size_t>(start.back()));
+  std::vector<Index> fill(start.begin(), start.end() - 1);
   for (const auto& f : faces)
     for (int k = 0; k < 3; ++k) {
       const Index a = f[k], b = f[(k + 1) % 3];
-      half.push_back({std::min(a, b), std::max(a, b), a < b});
+      half[fill[std::min(a, b)]++] = {std::max(a, b), a < b};
     }
-  std::sort(half.begin(), half.end(),
-            [](const HalfEdge& x, const HalfEdge& y) { return x.lo != y.lo ? x.lo < y.lo : x.hi < y.hi; });
   std::vector<EdgeUse> edges;
   edges.reserve(half.size() / 2 + 1);
-  for (std::size_t i = 0; i < half.size();) {
-    std::size_t j = i;
-    while (j < half.size() && half[j].lo == half[i].lo && half[j].hi == half[i].hi) ++j;
-    const int uses = static_cast<int>(j - i);
-    edges.push_back({half[i].lo, half[i].hi, uses, uses != 2 || half[i].forward != half[i + 1].forward});
-    i = j;
+  for (Index lo = 0; lo < points; ++lo) {
+    const auto first = half.begin() + start[lo], last = half.begin() + start[lo + 1];
+    std::sort(first, last, [](const HalfEdge& x, const HalfEdge& y) { return x.hi < y.hi; });
+    for (auto i = first; i != last;) {
+      auto j = i;
+      while (j != last && j->hi == i->hi) ++j;
+      const int uses = static_cast<int>(j - i);
+      edges.push_back({lo, i->hi, uses, uses != 2 || i->forward != (i + 1)->forward});
+      i = j;
+    }
   }
   return edges;
 }

@@ -95,6 +95,7 @@ class Engine {
   std::vector<std::uint32_t> version_;
   std::vector<std::uint32_t> dirty_;  // bumped when a point's neighbourhood energy changed (wide updates)
   double cos_max_turn_ = 0;
+  std::vector<EdgeUse> edges_;  // every edge of the input, from setup() until run() has queued them
   // Scratch, reused across calls.
   std::vector<Index> shared_, ring_u_, ring_v_, ring_tmp_;
   // Result bookkeeping.
@@ -129,7 +130,18 @@ void Engine::setup(const Mesh& mesh) {
   // Faces on canonical wedges (identical vertices merged, so an unwelded soup is not all seams); a
   // face whose corners are not three distinct points cannot take part and is dropped.
   const std::vector<Index> canonical = identical_vertex_classes(mesh);
+  const auto faces = static_cast<std::size_t>(mesh.num_faces());
+  s_.face.reserve(faces), s_.face_point.reserve(faces), s_.face_normal0.reserve(faces), s_.face_dead.reserve(faces);
+  {
+    // Each point's face list sized once (growing half a million lists one face at a time showed in
+    // the profile); a collapse appends at most a few more.
+    std::vector<std::uint32_t> degree(static_cast<std::size_t>(points), 0);
+    for (Index f = 0; f < mesh.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k) ++degree[s_.point_of[canonical[mesh.triangles(f, k)]]];
+    for (Index p = 0; p < points; ++p) s_.point_faces[p].reserve(degree[p]);
+  }
   std::vector<std::array<Index, 3>> point_faces;
+  point_faces.reserve(faces);
   for (Index f = 0; f < mesh.num_faces(); ++f) {
     const std::array<Index, 3> w{canonical[mesh.triangles(f, 0)], canonical[mesh.triangles(f, 1)],
                                  canonical[mesh.triangles(f, 2)]};
@@ -152,7 +164,8 @@ void Engine::setup(const Mesh& mesh) {
   s_.alive_faces = static_cast<Index>(point_faces.size());
 
   // Boundaries and non-manifold parts.
-  for (const EdgeUse& e : classify_edges(point_faces)) {
+  edges_ = classify_edges(point_faces);
+  for (const EdgeUse& e : edges_) {
     if (e.faces == 1) s_.flags[e.lo] |= kBorder, s_.flags[e.hi] |= kBorder;
     if (e.faces > 2 || !e.consistent) s_.flags[e.lo] |= kLocked, s_.flags[e.hi] |= kLocked;
   }
@@ -584,15 +597,10 @@ SimplifyResult Engine::run(Index target) {
   result.target_faces = target;
 
   // Every edge once, scored in both directions.
-  {
-    std::vector<std::array<Index, 3>> faces;
-    for (std::size_t f = 0; f < s_.face.size(); ++f)
-      if (!s_.face_dead[f])
-        faces.push_back({s_.corner_point(Index(f), 0), s_.corner_point(Index(f), 1), s_.corner_point(Index(f), 2)});
-    heap_.reserve(faces.size() * 3);
-    for (const EdgeUse& e : classify_edges(faces))
-      if (e.faces <= 2) push_edge(e.lo, e.hi);
-  }
+  heap_.reserve(edges_.size() * 2);
+  for (const EdgeUse& e : edges_)
+    if (e.faces <= 2) push_edge(e.lo, e.hi);
+  edges_ = {};
 
   const Index to_remove = std::max<Index>(1, s_.alive_faces - target);
   Index next_report = 0;
