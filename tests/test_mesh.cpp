@@ -1,4 +1,6 @@
 #include <gtest/gtest.h>
+
+#include <random>
 #include <lodkit/error.h>
 #include <lodkit/mesh.h>
 
@@ -58,6 +60,30 @@ TEST(Weld, MergesOnlyIdenticalVerticesAndKeepsSeams) {
   EXPECT_EQ(weld_identical_vertices(m), 1);
   EXPECT_EQ(m.num_vertices(), 4);
   EXPECT_EQ(m.attributes.uvs.rows(), 4);
+}
+
+TEST(Weld, ClassesMatchABruteForceComparison) {
+  // Many repeats of a few negative, zero and positive values: every vertex's class is the lowest
+  // vertex whose position and normal compare equal (-0 == +0).
+  std::mt19937 random(3);
+  const double values[] = {-2.5, -1.0, -0.0, 0.0, 1.0, 1e-300, -1e300};
+  std::uniform_int_distribution<int> pick(0, 6);
+  Mesh m;
+  m.positions.resize(400, 3);
+  m.attributes.normals.resize(400, 3);
+  for (Index v = 0; v < 400; ++v)
+    for (int k = 0; k < 3; ++k) {
+      m.positions(v, k) = values[pick(random)] * (k == 0 ? 1 : 0);
+      m.attributes.normals(v, k) = values[pick(random) % 3];
+    }
+  const std::vector<Index> classes = identical_vertex_classes(m);
+  for (Index v = 0; v < 400; ++v) {
+    Index first = v;
+    for (Index u = 0; u < v && first == v; ++u)
+      if (m.positions.row(u) == m.positions.row(v) && m.attributes.normals.row(u) == m.attributes.normals.row(v))
+        first = u;
+    EXPECT_EQ(classes[v], first) << v;
+  }
 }
 
 TEST(RemoveUnreferenced, KeepsOrderAndAttributes) {
