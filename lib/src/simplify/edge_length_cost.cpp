@@ -6,7 +6,7 @@
 namespace lodkit::detail {
 namespace {
 
-Eigen::Vector3d vertex_normal(EngineState& s, Index p) {
+Eigen::Vector3d vertex_normal(const EngineState& s, Index p) {
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   for (Index f : s.faces_of(p)) {
     const Eigen::Vector3d a = s.position[s.corner_point(f, 0)], b = s.position[s.corner_point(f, 1)],
@@ -21,7 +21,7 @@ class EdgeLengthCost final : public CostModel {
  public:
   explicit EdgeLengthCost(Placement placement) : placement_(placement) {}
 
-  bool score(EngineState& s, Index u, Index v, Freedom freedom, Candidate& out) override {
+  bool score(const EngineState& s, const Probe&, Index u, Index v, Freedom freedom, Candidate& out) override {
     const Eigen::Vector3d& pu = s.position[u];
     const Eigen::Vector3d& pv = s.position[v];
     const double agreement = std::abs(vertex_normal(s, u).dot(vertex_normal(s, v)));

@@ -6,6 +6,10 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <numbers>
+#include <optional>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include "core/topology.h"
 #include "simplify/engine.h"
@@ -13,8 +17,6 @@
 
 namespace lodkit {
 namespace detail {
-
-const std::vector<Index>& EngineState::faces_of(Index p) { return point_faces[p]; }
 
 namespace {
 
@@ -62,15 +64,22 @@ class Engine {
   // Checks are split by cost: the cheap ones (flags, shared faces, seam wedges) decide where the
   // surviving vertex may go and run whenever a candidate is scored; the link condition and the
   // geometric checks run once, when a candidate reaches the top of the queue.
-  /// The faces on edge uv, into shared_ (in u's face order, which the wedge map follows).
-  void find_shared_faces(Index u, Index v);
-  /// Expects shared_ filled for this edge by find_shared_faces().
-  Rejection structure(Index u, Index v, Freedom& freedom, bool link_condition);
-  Rejection map_wedges(Index u, Index v);
+  /// The faces on edge uv, into probe.shared (in u's face order, which the wedge map follows).
+  void find_shared_faces(Index u, Index v, Probe& probe) const;
+  /// Expects probe.shared filled for this edge by find_shared_faces(). Safe to call from several
+  /// threads without the link condition (which uses the engine's scratch rings).
+  Rejection structure(Index u, Index v, Freedom& freedom, bool link_condition, Probe& probe);
+  Rejection map_wedges(Index u, Index v, Probe& probe) const;
   Index wedge_at(Index f, Index p) const;
   Rejection geometry(Index u, Index v, const Eigen::Vector3d& p);
+  /// The checks and the cost of u -> v, into probe_ (the serial path that collapses).
   Rejection evaluate(Index u, Index v, Candidate& c, bool full);
-  void push_edge(Index a, Index b);
+  /// The queue entry of edge ab, in its cheaper legal direction, if either is (thread-safe).
+  std::optional<HeapEntry> rate_edge(Index a, Index b, std::array<Probe, 2>& probes);
+  void push_edge(Index a, Index b) { push_edges({{a, b}}); }
+  /// Rates the edges (side by side when they are many, or costly) and queues them in list order, so
+  /// the queue is the same whatever the number of threads.
+  void push_edges(const std::vector<std::pair<Index, Index>>& edges);
   HeapEntry entry(double cost, Index u, Index v) const {
     return {static_cast<float>(cost), u, v, version_[u] + version_[v], dirty_[u] + dirty_[v]};
   }
@@ -97,7 +106,11 @@ class Engine {
   double cos_max_turn_ = 0;
   std::vector<EdgeUse> edges_;  // every edge of the input, from setup() until run() has queued them
   // Scratch, reused across calls.
-  std::vector<Index> shared_, ring_u_, ring_v_, ring_tmp_;
+  Probe probe_;
+  std::vector<Index> ring_u_, ring_v_, ring_tmp_;
+  tbb::enumerable_thread_specific<std::array<Probe, 2>> probes_;
+  std::vector<std::optional<HeapEntry>> rated_;
+  std::vector<std::pair<Index, Index>> ring_edges_;
   // Result bookkeeping.
   double max_error_ = 0;
   Index collapses_ = 0, locked_ = 0, dropped_ = 0;
@@ -200,8 +213,8 @@ void Engine::setup(const Mesh& mesh) {
     for (int k = 0; k < 3; ++k) {
       const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
       if (!(s_.has(p0, kBorder) && s_.has(p1, kBorder))) continue;
-      find_shared_faces(p0, p1);
-      if (shared_.size() != 1) continue;  // not a boundary edge
+      find_shared_faces(p0, p1, probe_);
+      if (probe_.shared.size() != 1) continue;  // not a boundary edge
       const Eigen::Vector3d edge = s_.position[p1] - s_.position[p0];
       const Eigen::Vector3d m = edge.cross(n).normalized();
       if (!m.allFinite()) continue;
@@ -227,9 +240,9 @@ void Engine::add_crease_planes() {
     if (s_.face_dead[f]) continue;
     for (int k = 0; k < 3; ++k) {
       const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
-      find_shared_faces(p0, p1);
-      if (shared_.size() != 2) continue;  // border or non-manifold
-      const Index other = shared_[0] == f ? shared_[1] : shared_[0];
+      find_shared_faces(p0, p1, probe_);
+      if (probe_.shared.size() != 2) continue;  // border or non-manifold
+      const Index other = probe_.shared[0] == f ? probe_.shared[1] : probe_.shared[0];
       if (other < f) continue;  // seen from `other` already
       int j = 0;
       while (s_.corner_point(other, j) != p0) ++j;
@@ -325,54 +338,54 @@ Index Engine::wedge_at(Index f, Index p) const {
   return -1;
 }
 
-// Wedges: each wedge of u maps to v's wedge in the same vanishing face (shared_). Every wedge u still
+// Wedges: each wedge of u maps to v's wedge in the same vanishing face (probe.shared). Every wedge u still
 // uses must be mapped, and two wedges may not merge: seams neither tear nor fuse.
-Rejection Engine::map_wedges(Index u, Index v) {
-  s_.wedge_map_size = 0;
+Rejection Engine::map_wedges(Index u, Index v, Probe& probe) const {
+  probe.wedge_map_size = 0;
   if (!s_.has(u, kSeam) && !s_.has(v, kSeam)) {
     // One wedge each, so u's goes to v's. (A point that is no seam never becomes one: a seam point
     // can merge only into a point with as many wedges.)
-    s_.wedge_map[s_.wedge_map_size++] = {wedge_at(shared_[0], u), wedge_at(shared_[0], v)};
+    probe.wedge_map[probe.wedge_map_size++] = {wedge_at(probe.shared[0], u), wedge_at(probe.shared[0], v)};
     return Rejection::None;
   }
-  for (Index f : shared_) {
+  for (Index f : probe.shared) {
     const Index wu = wedge_at(f, u), wv = wedge_at(f, v);
     bool known = false;
-    for (int i = 0; i < s_.wedge_map_size; ++i) {
-      if (s_.wedge_map[i].first == wu) {
-        if (s_.wedge_map[i].second != wv) return Rejection::Seam;
+    for (int i = 0; i < probe.wedge_map_size; ++i) {
+      if (probe.wedge_map[i].first == wu) {
+        if (probe.wedge_map[i].second != wv) return Rejection::Seam;
         known = true;
-      } else if (s_.wedge_map[i].second == wv) {
+      } else if (probe.wedge_map[i].second == wv) {
         return Rejection::Seam;
       }
     }
-    if (!known) s_.wedge_map[s_.wedge_map_size++] = {wu, wv};
+    if (!known) probe.wedge_map[probe.wedge_map_size++] = {wu, wv};
   }
   for (Index f : s_.faces_of(u)) {
     const Index wu = wedge_at(f, u);
     bool mapped = false;
-    for (int i = 0; i < s_.wedge_map_size; ++i) mapped |= s_.wedge_map[i].first == wu;
+    for (int i = 0; i < probe.wedge_map_size; ++i) mapped |= probe.wedge_map[i].first == wu;
     if (!mapped) return Rejection::Seam;
   }
   return Rejection::None;
 }
 
-void Engine::find_shared_faces(Index u, Index v) {
-  shared_.clear();
+void Engine::find_shared_faces(Index u, Index v, Probe& probe) const {
+  probe.shared.clear();
   for (Index f : s_.faces_of(u))
     for (int k = 0; k < 3; ++k)
-      if (s_.corner_point(f, k) == v) shared_.push_back(f);
+      if (s_.corner_point(f, k) == v) probe.shared.push_back(f);
 }
 
-Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condition) {
+Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condition, Probe& probe) {
   if (s_.has(u, kRemoved) || s_.has(v, kRemoved)) return Rejection::Topology;
   if (s_.has(u, kLocked)) return Rejection::Locked;
   const std::vector<Index>& fu = s_.faces_of(u);
-  if (shared_.empty() || shared_.size() > 2) return Rejection::Topology;
-  const bool border_edge = shared_.size() == 1;
+  if (probe.shared.empty() || probe.shared.size() > 2) return Rejection::Topology;
+  const bool border_edge = probe.shared.size() == 1;
   if (s_.has(u, kBorder) && !border_edge) return Rejection::Boundary;  // u would leave its boundary
 
-  if (const Rejection r = map_wedges(u, v); r != Rejection::None) return r;
+  if (const Rejection r = map_wedges(u, v, probe); r != Rejection::None) return r;
 
   if (o_.preserve_topology && link_condition) {
     // Link condition: the only common neighbours of u and v are the apexes of the vanishing faces.
@@ -380,7 +393,7 @@ Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condit
     neighbours(v, ring_v_);
     ring_tmp_.clear();
     std::set_intersection(ring_u_.begin(), ring_u_.end(), ring_v_.begin(), ring_v_.end(), std::back_inserter(ring_tmp_));
-    if (ring_tmp_.size() != shared_.size()) return Rejection::Topology;
+    if (ring_tmp_.size() != probe.shared.size()) return Rejection::Topology;
     // v keeps enough neighbours (a tetrahedron cannot lose a vertex).
     const std::size_t degree = ring_u_.size() + ring_v_.size() - ring_tmp_.size() - 2;
     if (degree < (s_.has(v, kBorder) ? 2u : 3u)) return Rejection::Topology;
@@ -388,7 +401,7 @@ Rejection Engine::structure(Index u, Index v, Freedom& freedom, bool link_condit
       // A boundary loop of three edges (u v w) would collapse to nothing.
       Index w = -1;
       for (int k = 0; k < 3; ++k)
-        if (s_.corner_point(shared_[0], k) != u && s_.corner_point(shared_[0], k) != v) w = s_.corner_point(shared_[0], k);
+        if (s_.corner_point(probe.shared[0], k) != u && s_.corner_point(probe.shared[0], k) != v) w = s_.corner_point(probe.shared[0], k);
       int uw = 0, vw = 0;
       for (Index f : fu)
         for (int k = 0; k < 3; ++k) uw += s_.corner_point(f, k) == w;
@@ -444,35 +457,57 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
 }
 
 Rejection Engine::evaluate(Index u, Index v, Candidate& c, bool full) {
-  find_shared_faces(u, v);
+  find_shared_faces(u, v, probe_);
   Freedom freedom;
-  if (const Rejection r = structure(u, v, freedom, full); r != Rejection::None) return r;
-  if (!cost_->score(s_, u, v, freedom, c)) return Rejection::Cost;
+  if (const Rejection r = structure(u, v, freedom, full, probe_); r != Rejection::None) return r;
+  if (!cost_->score(s_, probe_, u, v, freedom, c)) return Rejection::Cost;
   if (o_.max_error && c.error > *o_.max_error) return Rejection::ErrorLimit;
   return full ? geometry(u, v, c.position) : Rejection::None;
 }
 
-void Engine::push_edge(Index a, Index b) {
+std::optional<HeapEntry> Engine::rate_edge(Index a, Index b, std::array<Probe, 2>& probes) {
   // Cheap checks per direction, then the cost. When neither end is constrained both directions merge
   // into the same vertex at the same place (unless placement is at an endpoint): score one.
   Freedom fa, fb;
-  find_shared_faces(a, b);  // the same faces for both directions
-  const bool ok_a = structure(a, b, fa, false) == Rejection::None;
-  const bool ok_b = structure(b, a, fb, false) == Rejection::None;
-  if (!ok_a && !ok_b) return;
-  auto score = [&](Index u, Index v, Freedom f, Candidate& c) {
-    return cost_->score(s_, u, v, f, c) && !(o_.max_error && c.error > *o_.max_error);
+  auto& [pa, pb] = probes;
+  find_shared_faces(a, b, pa);
+  pb.shared = pa.shared;  // the same faces for both directions
+  const bool ok_a = structure(a, b, fa, false, pa) == Rejection::None;
+  const bool ok_b = structure(b, a, fb, false, pb) == Rejection::None;
+  if (!ok_a && !ok_b) return std::nullopt;
+  auto score = [&](Index u, Index v, Freedom f, const Probe& probe, Candidate& c) {
+    return cost_->score(s_, probe, u, v, f, c) && !(o_.max_error && c.error > *o_.max_error);
   };
   Candidate ca, cb;
   const bool symmetric = ok_a && ok_b && fa == Freedom::Free && fb == Freedom::Free &&
                          o_.placement != Placement::Endpoint && !s_.has(a, kBorder) && !s_.has(b, kBorder) &&
                          !s_.has(a, kSeam) && !s_.has(b, kSeam);
-  const bool scored_a = ok_a && score(a, b, fa, ca);
-  const bool scored_b = !symmetric && ok_b && score(b, a, fb, cb);
-  if (!scored_a && !scored_b) return;
+  const bool scored_a = ok_a && score(a, b, fa, pa, ca);
+  const bool scored_b = !symmetric && ok_b && score(b, a, fb, pb, cb);
+  if (!scored_a && !scored_b) return std::nullopt;
   const bool use_a = scored_a && (!scored_b || ca.cost <= cb.cost);
-  const Index u = use_a ? a : b, v = use_a ? b : a;
-  heap_.push(entry(use_a ? ca.cost : cb.cost, u, v));
+  return entry(use_a ? ca.cost : cb.cost, use_a ? a : b, use_a ? b : a);
+}
+
+void Engine::push_edges(const std::vector<std::pair<Index, Index>>& edges) {
+  // Worth a task only where scoring is costly (hoppe: tens of microseconds per candidate) or the list
+  // is long (every edge at the start).
+  const std::size_t n = edges.size();
+  const bool parallel = n >= (cost_->wide_update() ? 4u : 4096u);
+  if (!parallel) {
+    for (const auto& [a, b] : edges)
+      if (const auto e = rate_edge(a, b, probes_.local())) heap_.push(*e);
+    return;
+  }
+  rated_.assign(n, std::nullopt);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, cost_->wide_update() ? 1 : 1024),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      auto& probes = probes_.local();
+                      for (std::size_t i = r.begin(); i < r.end(); ++i)
+                        rated_[i] = rate_edge(edges[i].first, edges[i].second, probes);
+                    });
+  for (const auto& e : rated_)
+    if (e) heap_.push(*e);
 }
 
 void Engine::collapse(Index u, Index v, const Candidate& c) {
@@ -480,9 +515,9 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
   if (o_.record_collapses) {
     records_.push_back({u, v, s_.position[v], c.position, c.error, {}, {}, {}, {}, {}});
     rec = &records_.back();
-    for (int i = 0; i < s_.wedge_map_size; ++i) rec->wedge_map.push_back({s_.wedge_map[i].first, s_.wedge_map[i].second});
+    for (int i = 0; i < probe_.wedge_map_size; ++i) rec->wedge_map.push_back({probe_.wedge_map[i].first, probe_.wedge_map[i].second});
   }
-  for (Index f : shared_) {
+  for (Index f : probe_.shared) {
     s_.face_dead[f] = 1;
     --s_.alive_faces;
     if (rec) rec->removed_faces.push_back(f);
@@ -492,7 +527,7 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
     auto& list = s_.point_faces[p];
     list.erase(std::remove_if(list.begin(), list.end(), [&](Index f) { return s_.face_dead[f] != 0; }), list.end());
   };
-  for (Index f : shared_)
+  for (Index f : probe_.shared)
     for (int k = 0; k < 3; ++k) {
       const Index q = s_.corner_point(f, k);
       if (q != u) prune(q);
@@ -502,8 +537,8 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
     for (int k = 0; k < 3; ++k) {
       if (s_.corner_point(f, k) != u) continue;
       const Index old = s_.face[f][k];
-      for (int i = 0; i < s_.wedge_map_size; ++i)
-        if (s_.wedge_map[i].first == old) s_.face[f][k] = s_.wedge_map[i].second;
+      for (int i = 0; i < probe_.wedge_map_size; ++i)
+        if (probe_.wedge_map[i].first == old) s_.face[f][k] = probe_.wedge_map[i].second;
       s_.face_point[f][k] = v;
       if (rec) rec->changed_corners.push_back({f, k, old});
     }
@@ -513,8 +548,8 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
     // The kept wedges take the attribute values that minimise the merged attribute error.
     const std::size_t k = static_cast<std::size_t>(s_.attribute_quadrics.dims());
     const std::size_t layout = static_cast<std::size_t>(attribute_values_per_vertex(*s_.input));
-    for (int i = 0; i < s_.wedge_map_size; ++i) {
-      const auto [wu, wv] = s_.wedge_map[i];
+    for (int i = 0; i < probe_.wedge_map_size; ++i) {
+      const auto [wu, wv] = probe_.wedge_map[i];
       s_.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), c.position, &s_.wedge_value[k * wv]);
       s_.attribute_quadrics.merge(std::size_t(wv), std::size_t(wu));
       if (rec) {
@@ -533,7 +568,7 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
   ++version_[v];
   max_error_ = std::max(max_error_, c.error);
   ++collapses_;
-  cost_->collapsed(s_, u, v, shared_);
+  cost_->collapsed(s_, u, v, probe_.shared);
 
   std::vector<Index> ring;
   neighbours(v, ring);
@@ -544,7 +579,9 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
   // collapse can lower its neighbours' costs, so their last cost is no lower bound.)
   if (cost_->wide_update())
     for (Index w : ring) ++dirty_[w];
-  for (Index w : ring) push_edge(v, w);
+  ring_edges_.clear();
+  for (Index w : ring) ring_edges_.push_back({v, w});
+  push_edges(ring_edges_);
 }
 
 std::optional<std::pair<Index, Index>> Engine::cheapest_boundary_collapse() {
@@ -556,7 +593,7 @@ std::optional<std::pair<Index, Index>> Engine::cheapest_boundary_collapse() {
     if (!s_.has(u, kBorder) || s_.has(u, kRemoved)) continue;
     neighbours(u, ring);
     for (Index v : ring)  // both directions: v is on the boundary too and visits u in turn
-      if (evaluate(u, v, c, true) == Rejection::None && shared_.size() == 1 && (!best || c.cost < best_cost))
+      if (evaluate(u, v, c, true) == Rejection::None && probe_.shared.size() == 1 && (!best || c.cost < best_cost))
         best = {u, v}, best_cost = c.cost;
   }
   return best;
@@ -598,9 +635,14 @@ SimplifyResult Engine::run(Index target) {
 
   // Every edge once, scored in both directions.
   heap_.reserve(edges_.size() * 2);
-  for (const EdgeUse& e : edges_)
-    if (e.faces <= 2) push_edge(e.lo, e.hi);
-  edges_ = {};
+  {
+    std::vector<std::pair<Index, Index>> edges;
+    edges.reserve(edges_.size());
+    for (const EdgeUse& e : edges_)
+      if (e.faces <= 2) edges.push_back({e.lo, e.hi});
+    edges_ = {};
+    push_edges(edges);
+  }
 
   const Index to_remove = std::max<Index>(1, s_.alive_faces - target);
   Index next_report = 0;
@@ -628,7 +670,7 @@ SimplifyResult Engine::run(Index target) {
       }
       continue;
     }
-    if (s_.alive_faces - static_cast<Index>(shared_.size()) < target) {
+    if (s_.alive_faces - static_cast<Index>(probe_.shared.size()) < target) {
       deferred = {e.u, e.v};
       break;
     }

@@ -43,14 +43,19 @@ struct EngineState {
   /// Per-wedge attribute quadrics and values (scaled), when attribute weights are on.
   AttributeQuadrics attribute_quadrics;
   std::vector<double> wedge_value;  ///< k values per wedge
-  /// The wedge map of the last structural check: each wedge of u -> the wedge of v it merges into.
-  std::pair<Index, Index> wedge_map[2];
-  int wedge_map_size = 0;
 
   Index corner_point(Index f, int k) const { return face_point[f][k]; }
   bool has(Index p, PointFlag flag) const { return flags[p] & flag; }
-  /// Alive faces of point p (prunes dead ones from its list).
-  const std::vector<Index>& faces_of(Index p);
+  /// Alive faces of point p (a collapse prunes the dead ones from the lists it touches).
+  const std::vector<Index>& faces_of(Index p) const { return point_faces[p]; }
+};
+
+/// What the structural checks of one candidate u -> v found. Each direction and each thread has its
+/// own, so candidates can be checked and scored side by side.
+struct Probe {
+  std::vector<Index> shared;             ///< the faces on edge uv (they vanish), in u's face order
+  std::pair<Index, Index> wedge_map[2];  ///< each wedge of u -> the wedge of v it merges into
+  int wedge_map_size = 0;
 };
 
 /// Where the surviving vertex may go.
@@ -65,8 +70,9 @@ struct Candidate {
 class CostModel {
  public:
   virtual ~CostModel() = default;
-  /// Scores collapse u -> v. Fills `out`; returns false if the cost refuses the collapse.
-  virtual bool score(EngineState& s, Index u, Index v, Freedom freedom, Candidate& out) = 0;
+  /// Scores collapse u -> v, whose checks filled `probe`. Fills `out`; returns false if the cost
+  /// refuses the collapse. Called from several threads at once for different candidates.
+  virtual bool score(const EngineState& s, const Probe& probe, Index u, Index v, Freedom freedom, Candidate& out) = 0;
   /// Called after u -> v was performed; `removed_faces` are the faces that vanished.
   virtual void collapsed(EngineState&, Index /*u*/, Index /*v*/, const std::vector<Index>& /*removed_faces*/) {}
   /// True if a collapse changes the costs of edges around v's neighbours too (not just v's edges):

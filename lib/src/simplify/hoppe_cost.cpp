@@ -6,6 +6,7 @@
 // each point onto its nearest face and (b) the linear least-squares solve for the position given
 // those projections, starting from the quadric-optimal position.
 #include <random>
+#include <tbb/enumerable_thread_specific.h>
 
 #include "core/geometry.h"
 #include "simplify/engine.h"
@@ -13,7 +14,9 @@
 namespace lodkit::detail {
 namespace {
 
-class HoppeCost final : public CostModel {
+// Scores candidates against the shared sample points. Each thread that scores has its own scorer:
+// the scratch below is per candidate, the points are only read.
+class HoppeScorer {
   // A triangle of the new star, with its plane and the three planes through its edges at right angles
   // to it (outward normals).
   struct Tri {
@@ -27,34 +30,11 @@ class HoppeCost final : public CostModel {
   };
 
  public:
-  HoppeCost(const SimplifyOptions& o, const EngineState& s) {
-    // Points: every vertex position, plus `points_per_face` random points per face (seeded).
-    const Mesh& m = *s.input;
-    std::mt19937_64 rng(o.seed);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    face_points_.resize(s.face.size());
-    std::vector<char> placed(s.position.size(), 0);
-    double carry = 0;
-    for (std::size_t f = 0; f < s.face.size(); ++f) {
-      if (s.face_dead[f]) continue;
-      for (int k = 0; k < 3; ++k) {
-        const Index p = s.corner_point(Index(f), k);
-        if (!placed[p]) placed[p] = 1, add_point(s.position[p], Index(f));
-      }
-      carry += o.hoppe_points_per_face;
-      for (; carry >= 1.0; carry -= 1.0) {
-        double a = unit(rng), b = unit(rng);
-        if (a + b > 1) a = 1 - a, b = 1 - b;
-        const Eigen::Vector3d p0 = m.positions.row(s.face[f][0]), p1 = m.positions.row(s.face[f][1]),
-                              p2 = m.positions.row(s.face[f][2]);
-        add_point(p0 + a * (p1 - p0) + b * (p2 - p0), Index(f));
-      }
-    }
-  }
+  HoppeScorer(const std::vector<Eigen::Vector3d>& point, const std::vector<double>& dist2,
+              const std::vector<std::vector<Index>>& face_points)
+      : point_(point), dist2_(dist2), face_points_(face_points) {}
 
-  bool wide_update() const override { return true; }
-
-  bool score(EngineState& s, Index u, Index v, Freedom freedom, Candidate& out) override {
+  bool score(const EngineState& s, Index u, Index v, Freedom freedom, Candidate& out) {
     gather(s, u, v);
     // Spring energy before: the edges at u and at v (the rest of the neighbourhood does not change).
     const double kappa = spring_constant();
@@ -185,41 +165,10 @@ class HoppeCost final : public CostModel {
     return out;
   }
 
-  void collapsed(EngineState& s, Index u, Index v, const std::vector<Index>& removed_faces) override {
-    // Re-assign the points of the old neighbourhood to the faces now around v.
-    std::vector<Index> moving;
-    for (Index f : removed_faces) moving.insert(moving.end(), face_points_[f].begin(), face_points_[f].end());
-    for (Index f : removed_faces) face_points_[f].clear();
-    const std::vector<Index>& around = s.faces_of(v);
-    for (Index f : around) {
-      moving.insert(moving.end(), face_points_[f].begin(), face_points_[f].end());
-      face_points_[f].clear();
-    }
-    (void)u;
-    for (Index i : moving) {
-      double best = INFINITY;
-      Index best_face = -1;
-      for (Index f : around) {
-        const Eigen::Vector3d q = closest_point_on_triangle(point_[i], s.position[s.corner_point(f, 0)],
-                                                            s.position[s.corner_point(f, 1)], s.position[s.corner_point(f, 2)]);
-        const double d = (q - point_[i]).squaredNorm();
-        if (d < best) best = d, best_face = f;
-      }
-      dist2_[i] = best;
-      face_points_[best_face].push_back(i);
-    }
-  }
-
  private:
-  void add_point(const Eigen::Vector3d& p, Index face) {
-    face_points_[face].push_back(static_cast<Index>(point_.size()));
-    point_.push_back(p);
-    dist2_.push_back(0.0);
-  }
-
   // Collects the neighbourhood of u -> v: its points, the new star (corner -1 = the merged vertex),
   // and the rings of u, v and the merged vertex.
-  void gather(EngineState& s, Index u, Index v) {
+  void gather(const EngineState& s, Index u, Index v) {
     points_.clear();
     weight_.clear();
     home_.clear();
@@ -273,9 +222,9 @@ class HoppeCost final : public CostModel {
     return 1e-8;
   }
 
-  std::vector<Eigen::Vector3d> point_;
-  std::vector<double> dist2_;
-  std::vector<std::vector<Index>> face_points_;
+  const std::vector<Eigen::Vector3d>& point_;
+  const std::vector<double>& dist2_;  ///< per point: squared distance to its face
+  const std::vector<std::vector<Index>>& face_points_;
   // Scratch for one candidate.
   static constexpr std::size_t kPointsPerFace = 16;
   std::vector<Index> points_, ring_u_, ring_v_, ring_;
@@ -292,6 +241,77 @@ class HoppeCost final : public CostModel {
   };
   std::vector<Projection> projections_;
   Index faces_ = 0;
+};
+
+class HoppeCost final : public CostModel {
+ public:
+  HoppeCost(const SimplifyOptions& o, const EngineState& s) {
+    // Points: every vertex position, plus `points_per_face` random points per face (seeded).
+    const Mesh& m = *s.input;
+    std::mt19937_64 rng(o.seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    face_points_.resize(s.face.size());
+    std::vector<char> placed(s.position.size(), 0);
+    double carry = 0;
+    for (std::size_t f = 0; f < s.face.size(); ++f) {
+      if (s.face_dead[f]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Index p = s.corner_point(Index(f), k);
+        if (!placed[p]) placed[p] = 1, add_point(s.position[p], Index(f));
+      }
+      carry += o.hoppe_points_per_face;
+      for (; carry >= 1.0; carry -= 1.0) {
+        double a = unit(rng), b = unit(rng);
+        if (a + b > 1) a = 1 - a, b = 1 - b;
+        const Eigen::Vector3d p0 = m.positions.row(s.face[f][0]), p1 = m.positions.row(s.face[f][1]),
+                              p2 = m.positions.row(s.face[f][2]);
+        add_point(p0 + a * (p1 - p0) + b * (p2 - p0), Index(f));
+      }
+    }
+  }
+
+  bool wide_update() const override { return true; }
+
+  bool score(const EngineState& s, const Probe&, Index u, Index v, Freedom freedom, Candidate& out) override {
+    return scorers_.local().score(s, u, v, freedom, out);
+  }
+
+  void collapsed(EngineState& s, Index u, Index v, const std::vector<Index>& removed_faces) override {
+    // Re-assign the points of the old neighbourhood to the faces now around v.
+    std::vector<Index> moving;
+    for (Index f : removed_faces) moving.insert(moving.end(), face_points_[f].begin(), face_points_[f].end());
+    for (Index f : removed_faces) face_points_[f].clear();
+    const std::vector<Index>& around = s.faces_of(v);
+    for (Index f : around) {
+      moving.insert(moving.end(), face_points_[f].begin(), face_points_[f].end());
+      face_points_[f].clear();
+    }
+    (void)u;
+    for (Index i : moving) {
+      double best = INFINITY;
+      Index best_face = -1;
+      for (Index f : around) {
+        const Eigen::Vector3d q = closest_point_on_triangle(point_[i], s.position[s.corner_point(f, 0)],
+                                                            s.position[s.corner_point(f, 1)], s.position[s.corner_point(f, 2)]);
+        const double d = (q - point_[i]).squaredNorm();
+        if (d < best) best = d, best_face = f;
+      }
+      dist2_[i] = best;
+      face_points_[best_face].push_back(i);
+    }
+  }
+
+ private:
+  void add_point(const Eigen::Vector3d& p, Index face) {
+    face_points_[face].push_back(static_cast<Index>(point_.size()));
+    point_.push_back(p);
+    dist2_.push_back(0.0);
+  }
+
+  std::vector<Eigen::Vector3d> point_;
+  std::vector<double> dist2_;
+  std::vector<std::vector<Index>> face_points_;
+  tbb::enumerable_thread_specific<HoppeScorer> scorers_{[this] { return HoppeScorer(point_, dist2_, face_points_); }};
 };
 
 }  // namespace

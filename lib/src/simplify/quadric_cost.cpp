@@ -8,7 +8,7 @@ class QuadricCost final : public CostModel {
  public:
   explicit QuadricCost(Placement placement) : placement_(placement) {}
 
-  bool score(EngineState& s, Index u, Index v, Freedom freedom, Candidate& out) override {
+  bool score(const EngineState& s, const Probe& probe, Index u, Index v, Freedom freedom, Candidate& out) override {
     const Quadric q = s.quadric[u] + s.quadric[v];
     const Eigen::Vector3d& pu = s.position[u];
     const Eigen::Vector3d& pv = s.position[v];
@@ -37,8 +37,8 @@ class QuadricCost final : public CostModel {
     if (s.attribute_quadrics.enabled()) {
       // Attribute error of every wedge pair that merges, at their best attribute values.
       double value[16];
-      for (int i = 0; i < s.wedge_map_size; ++i) {
-        const auto [wu, wv] = s.wedge_map[i];
+      for (int i = 0; i < probe.wedge_map_size; ++i) {
+        const auto [wu, wv] = probe.wedge_map[i];
         const std::size_t k = static_cast<std::size_t>(s.attribute_quadrics.dims());
         std::copy_n(&s.wedge_value[k * wv], k, value);
         out.cost += s.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), out.position, value);
