@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <exception>
 #include <functional>
+#include <new>
+#include <tbb/global_control.h>
 #include <vector>
 
 namespace lodkit::bench {
@@ -31,6 +33,12 @@ inline ChildRun run_in_child(const std::function<std::vector<double>()>& work, s
                              int limit_seconds = 0) {
   int fds[2];
   if (pipe(fds) != 0) std::exit(1);
+  {
+    // A forked child inherits TBB's state but not its worker threads, and then runs every parallel
+    // loop on one thread. Ending the parent's workers first lets the child start TBB afresh.
+    tbb::task_scheduler_handle handle{tbb::attach{}};
+    (void)tbb::finalize(handle, std::nothrow);
+  }
   const pid_t pid = fork();
   if (pid == 0) {
     close(fds[0]);
