@@ -76,7 +76,9 @@ class Engine {
   Rejection evaluate(Index u, Index v, Candidate& c, bool full);
   /// The queue entry of edge ab, in its cheaper legal direction, if either is (thread-safe).
   std::optional<HeapEntry> rate_edge(Index a, Index b, std::array<Probe, 2>& probes);
-  void push_edge(Index a, Index b) { push_edges({{a, b}}); }
+  void push_edge(Index a, Index b) {
+    if (const auto e = rate_edge(a, b, probes_.local())) heap_.push(*e);
+  }
   /// Rates the edges (side by side when they are many, or costly) and queues them in list order, so
   /// the queue is the same whatever the number of threads.
   void push_edges(const std::vector<std::pair<Index, Index>>& edges);
@@ -493,14 +495,15 @@ void Engine::push_edges(const std::vector<std::pair<Index, Index>>& edges) {
   // Worth a task only where scoring is costly (hoppe: tens of microseconds per candidate) or the list
   // is long (every edge at the start).
   const std::size_t n = edges.size();
-  const bool parallel = n >= (cost_->wide_update() ? 4u : 4096u);
-  if (!parallel) {
+  const bool costly = cost_->costly();
+  if (n < (costly ? 4u : 4096u)) {
+    auto& probes = probes_.local();
     for (const auto& [a, b] : edges)
-      if (const auto e = rate_edge(a, b, probes_.local())) heap_.push(*e);
+      if (const auto e = rate_edge(a, b, probes)) heap_.push(*e);
     return;
   }
   rated_.assign(n, std::nullopt);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, cost_->wide_update() ? 1 : 1024),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, costly ? 1 : 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       auto& probes = probes_.local();
                       for (std::size_t i = r.begin(); i < r.end(); ++i)
@@ -593,7 +596,8 @@ std::optional<std::pair<Index, Index>> Engine::cheapest_boundary_collapse() {
     if (!s_.has(u, kBorder) || s_.has(u, kRemoved)) continue;
     neighbours(u, ring);
     for (Index v : ring)  // both directions: v is on the boundary too and visits u in turn
-      if (evaluate(u, v, c, true) == Rejection::None && probe_.shared.size() == 1 && (!best || c.cost < best_cost))
+      if (s_.has(v, kBorder) && evaluate(u, v, c, true) == Rejection::None && probe_.shared.size() == 1 &&
+          (!best || c.cost < best_cost))
         best = {u, v}, best_cost = c.cost;
   }
   return best;

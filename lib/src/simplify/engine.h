@@ -78,6 +78,8 @@ class CostModel {
   /// True if a collapse changes the costs of edges around v's neighbours too (not just v's edges):
   /// those are then re-scored lazily, when they reach the top of the queue.
   virtual bool wide_update() const { return false; }
+  /// True if one score costs enough (tens of microseconds) to share even a handful across threads.
+  virtual bool costly() const { return false; }
 };
 
 std::unique_ptr<CostModel> make_quadric_cost(const SimplifyOptions& options);

@@ -271,6 +271,7 @@ class HoppeCost final : public CostModel {
   }
 
   bool wide_update() const override { return true; }
+  bool costly() const override { return true; }
 
   bool score(const EngineState& s, const Probe&, Index u, Index v, Freedom freedom, Candidate& out) override {
     return scorers_.local().score(s, u, v, freedom, out);
