@@ -114,7 +114,7 @@ class HoppeScorer {
         const Quadric q = s.quadric[u] + s.quadric[v];
         const Eigen::Vector3d mid = 0.5 * (s.position[u] + s.position[v]);
         Eigen::Vector3d best;
-        p = q.minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (s.position[u] - s.position[v]).norm() ? best : mid;
+        p = q.truncated_minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (s.position[u] - s.position[v]).norm() ? best : mid;
       }
       e = energy(p, freedom == Freedom::Free, &next), e_worst = worst;
       if (freedom == Freedom::Free && solved_energy < e) e = solved_energy, p = next, e_worst = solved_worst;
