@@ -82,6 +82,8 @@ class Engine {
   /// Rates the edges (side by side when they are many, or costly) and queues them in list order, so
   /// the queue is the same whatever the number of threads.
   void push_edges(const std::vector<std::pair<Index, Index>>& edges);
+  /// Rates the edges side by side into rated_, in list order.
+  void rate_edges(const std::vector<std::pair<Index, Index>>& edges);
   HeapEntry entry(double cost, Index u, Index v) const {
     return {static_cast<float>(cost), u, v, version_[u] + version_[v], dirty_[u] + dirty_[v]};
   }
@@ -106,7 +108,7 @@ class Engine {
   SimplifyOptions o_;
   EngineState s_;
   std::unique_ptr<CostModel> cost_;
-  QuadHeap<HeapEntry, CheaperFirst> heap_;
+  BatchQueue<HeapEntry, CheaperFirst> heap_;
   // Entries a collapse made stale, roughly (the edges at its two ends). Nine in ten pops used to be
   // stale entries, each a full sift through a heap of millions; once they are a quarter of it, one
   // linear pass drops them all instead.
@@ -510,15 +512,19 @@ void Engine::push_edges(const std::vector<std::pair<Index, Index>>& edges) {
       if (const auto e = rate_edge(a, b, probes)) heap_.push(*e);
     return;
   }
-  rated_.assign(n, std::nullopt);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, costly ? 1 : 1024),
+  rate_edges(edges);
+  for (const auto& e : rated_)
+    if (e) heap_.push(*e);
+}
+
+void Engine::rate_edges(const std::vector<std::pair<Index, Index>>& edges) {
+  rated_.assign(edges.size(), std::nullopt);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), cost_->costly() ? 1 : 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       auto& probes = probes_.local();
                       for (std::size_t i = r.begin(); i < r.end(); ++i)
                         rated_[i] = rate_edge(edges[i].first, edges[i].second, probes);
                     });
-  for (const auto& e : rated_)
-    if (e) heap_.push(*e);
 }
 
 void Engine::collapse(Index u, Index v, const Candidate& c) {
@@ -533,10 +539,12 @@ void Engine::collapse(Index u, Index v, const Candidate& c) {
     --s_.alive_faces;
     if (rec) rec->removed_faces.push_back(f);
   }
-  // Keep every point's face list free of dead faces: only u, v and the apexes held them.
+  // Keep every point's face list free of dead faces: only u, v and the apexes held them. (Matching
+  // the one or two faces, not looking each face up in face_dead: those lookups missed the cache.)
+  const Index gone0 = probe_.shared[0], gone1 = probe_.shared.size() > 1 ? probe_.shared[1] : gone0;
   auto prune = [&](Index p) {
     auto& list = s_.point_faces[p];
-    list.erase(std::remove_if(list.begin(), list.end(), [&](Index f) { return s_.face_dead[f] != 0; }), list.end());
+    list.erase(std::remove_if(list.begin(), list.end(), [&](Index f) { return f == gone0 || f == gone1; }), list.end());
   };
   for (Index f : probe_.shared)
     for (int k = 0; k < 3; ++k) {
@@ -649,14 +657,19 @@ SimplifyResult Engine::run(Index target) {
   result.target_faces = target;
 
   // Every edge once, scored in both directions.
-  heap_.reserve(edges_.size() * 2);
   {
     std::vector<std::pair<Index, Index>> edges;
     edges.reserve(edges_.size());
     for (const EdgeUse& e : edges_)
       if (e.faces <= 2) edges.push_back({e.lo, e.hi});
     edges_ = {};
-    push_edges(edges);
+    rate_edges(edges);
+    std::vector<HeapEntry> first;
+    first.reserve(edges.size());
+    for (const auto& e : rated_)
+      if (e) first.push_back(*e);
+    rated_ = {};
+    heap_.load(std::move(first));
   }
 
   const Index to_remove = std::max<Index>(1, s_.alive_faces - target);

@@ -2,6 +2,7 @@
 // A 4-ary min-heap: half the depth of a binary heap, and the four children of a node share a cache
 // line or two, which matters when the queue holds millions of candidates.
 #include <algorithm>
+#include <tbb/parallel_sort.h>
 #include <utility>
 #include <vector>
 
@@ -62,6 +63,48 @@ class QuadHeap {
   }
 
   std::vector<T> items_;
+  Less less_;
+};
+
+/// A priority queue for a run that starts with many items and then adds a few at a time: the first
+/// batch sorted once in a flat array, read front to back; later items in a 4-ary heap; pop takes the
+/// smaller front. Popping from one big heap sifted through levels far outside the cache; the sorted
+/// batch is read in order. Pops come out in the same order as from one heap.
+template <typename T, typename Less>
+class BatchQueue {
+ public:
+  bool empty() const { return next_ == run_.size() && heap_.empty(); }
+  std::size_t size() const { return run_.size() - next_ + heap_.size(); }
+
+  /// Replaces the contents with `items`.
+  void load(std::vector<T> items) {
+    run_ = std::move(items);
+    next_ = 0;
+    heap_ = {};
+    tbb::parallel_sort(run_.begin(), run_.end(), less_);
+  }
+  void push(const T& item) { heap_.push(item); }
+
+  const T& top() const { return from_run() ? run_[next_] : heap_.top(); }
+  T pop() { return from_run() ? run_[next_++] : heap_.pop(); }
+
+  /// Drops the items `keep` rejects.
+  template <typename Keep>
+  void filter(Keep keep) {
+    run_.erase(std::remove_if(run_.begin() + static_cast<std::ptrdiff_t>(next_), run_.end(),
+                              [&](const T& item) { return !keep(item); }),
+               run_.end());
+    run_.erase(run_.begin(), run_.begin() + static_cast<std::ptrdiff_t>(next_));
+    next_ = 0;
+    heap_.filter(keep);
+  }
+
+ private:
+  bool from_run() const { return next_ < run_.size() && (heap_.empty() || !less_(heap_.top(), run_[next_])); }
+
+  std::vector<T> run_;
+  std::size_t next_ = 0;
+  QuadHeap<T, Less> heap_;
   Less less_;
 };
 
