@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace lodkit::detail {
 
@@ -50,13 +51,13 @@ struct Quadric {
   /// neighbourhood leaves p free along the plane or the line) the directions Q does not constrain stay
   /// at the anchor. Returns false when Q constrains nothing.
   bool minimiser_near(const Eigen::Vector3d& anchor, Eigen::Vector3d& out, double regularisation = 1e-8) const {
-    if (const int solved = well_conditioned_minimiser(out); solved >= 0) return solved;
+    if (const auto solved = well_conditioned_minimiser(out)) return *solved;
     // Minimise Q(p) + eps |p - anchor|^2. Along an eigenvector of A with eigenvalue lambda the step
     // from the anchor is scaled by lambda / (lambda + eps): all of it where Q constrains p, none where
     // it does not. The quadric cost used truncated_minimiser_near() before: the same idea with a hard
-    // cut, but a trigonometric eigen-solve for 4 in 5 candidates on a scan (igea 1M -> 10 %: 5.03 s ->
-    // 4.4 s). Its errors were equal or lower on five meshes at five targets each (docs/benchmarks.md);
-    // eps = 1e-6 of the trace was worse on fandisk.
+    // cut, but a trigonometric eigen-solve for 4 in 5 candidates on a scan. The errors were equal or
+    // lower on five meshes at five targets each; eps = 1e-6 of the trace was worse on fandisk
+    // (docs/benchmarks.md, "Engine speed-ups, session 9").
     Eigen::Matrix3d r = A();
     r.diagonal().array() += regularisation * r.trace();
     out = anchor - r.inverse() * (A() * anchor + b());
@@ -67,7 +68,7 @@ struct Quadric {
   /// the largest stay at the anchor's value. An eigen-solve; hoppe starts its local optimisation here
   /// (from the regularised point its RMS was higher on four of five meshes, and fandisk took 30 % longer).
   bool truncated_minimiser_near(const Eigen::Vector3d& anchor, Eigen::Vector3d& out, double relative_floor = 1e-6) const {
-    if (const int solved = well_conditioned_minimiser(out); solved >= 0) return solved;
+    if (const auto solved = well_conditioned_minimiser(out)) return *solved;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(A());
     const Eigen::Vector3d& lambda = eig.eigenvalues();
@@ -83,13 +84,13 @@ struct Quadric {
   }
 
  private:
-  /// 1 or 0: the plain 3x3 solve's result (a corner-like neighbourhood) and whether it is finite;
-  /// -1 if A is too near singular for it. 0 too when Q constrains nothing.
-  int well_conditioned_minimiser(Eigen::Vector3d& out) const {
+  /// The plain 3x3 solve where A is well conditioned (a corner-like neighbourhood): whether its result
+  /// is finite. False where Q constrains nothing; nothing where A is too near singular for it.
+  std::optional<bool> well_conditioned_minimiser(Eigen::Vector3d& out) const {
     const Eigen::Matrix3d a = A();
     const double scale = a.trace();
-    if (!(scale > 0)) return 0;
-    if (a.determinant() <= 1e-6 * scale * scale * scale) return -1;
+    if (!(scale > 0)) return false;
+    if (a.determinant() <= 1e-6 * scale * scale * scale) return std::nullopt;
     out = -a.inverse() * b();
     return out.allFinite();
   }
