@@ -13,7 +13,8 @@
 // Costs:
 //   Quadric     Garland & Heckbert, "Surface simplification using quadric error metrics" (1997):
 //               area-weighted plane quadrics plus boundary constraint planes; optimal placement by a
-//               3x3 eigen-solve that falls back to the best of endpoints and midpoint.
+//               3x3 solve (regularised towards the midpoint where Q is near-singular), with the
+//               endpoints and the midpoint as fallbacks.
 //   Hoppe       Hoppe, "Progressive meshes" (1996): E = E_dist + E_spring over points sampled on the
 //               original surface, each collapse scored by locally optimising the new position.
 //   EdgeLength  the naive |v1 - v2| / |n1 . n2| priority with endpoint/midpoint placement; with

@@ -24,8 +24,8 @@ class QuadricCost final : public CostModel {
     } else if (placement_ == Placement::Endpoint) {
       consider(pv, have);  // the u -> v direction; v -> u is scored separately
     } else {
-      // The 3x3 solve; where Q is rank-deficient (flat or straight regions) the eigen-solve keeps the
-      // unconstrained directions at the midpoint. Endpoints and midpoint stay as fallbacks.
+      // The 3x3 solve; where Q is rank-deficient (flat or straight regions) a regularised solve keeps
+      // the unconstrained directions at the midpoint. Endpoints and midpoint stay as fallbacks.
       const Eigen::Vector3d mid = 0.5 * (pu + pv);
       Eigen::Vector3d best;
       if (q.minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (pu - pv).norm() + 1e-12) consider(best, have);
