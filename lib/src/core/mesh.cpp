@@ -67,13 +67,14 @@ Eigen::VectorX<Index> position_classes(const Mesh& mesh) {
   std::size_t capacity = 16;
   while (capacity < 2 * static_cast<std::size_t>(n)) capacity *= 2;
   std::vector<Index> slot(capacity, -1);
-  std::vector<detail::PositionKey> keys(static_cast<std::size_t>(n));
-  for (Index v = 0; v < n; ++v) {
+  auto key_of = [&](Index v) {
     const auto p = mesh.positions.row(v);
-    const detail::PositionKey key = detail::position_key(p[0], p[1], p[2]);
-    keys[static_cast<std::size_t>(v)] = key;
+    return detail::position_key(p[0], p[1], p[2]);
+  };
+  for (Index v = 0; v < n; ++v) {
+    const detail::PositionKey key = key_of(v);
     std::size_t i = detail::PositionKeyHash{}(key) & (capacity - 1);
-    while (slot[i] >= 0 && !(keys[static_cast<std::size_t>(slot[i])] == key)) i = (i + 1) & (capacity - 1);
+    while (slot[i] >= 0 && !(key_of(slot[i]) == key)) i = (i + 1) & (capacity - 1);
     if (slot[i] < 0) slot[i] = v;
     cls[v] = slot[i];
   }

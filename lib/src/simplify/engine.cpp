@@ -77,7 +77,7 @@ class Engine {
   /// The queue entry of edge ab, in its cheaper legal direction, if either is (thread-safe).
   std::optional<HeapEntry> rate_edge(Index a, Index b, std::array<Probe, 2>& probes);
   void push_edge(Index a, Index b) {
-    if (const auto e = rate_edge(a, b, probes_.local())) heap_.push(*e);
+    if (const auto e = rate_edge(a, b, probes_.local())) queue_.push(*e);
   }
   /// Rates the edges (side by side when they are many, or costly) and queues them in list order, so
   /// the queue is the same whatever the number of threads.
@@ -108,7 +108,7 @@ class Engine {
   SimplifyOptions o_;
   EngineState s_;
   std::unique_ptr<CostModel> cost_;
-  BatchQueue<HeapEntry, CheaperFirst> heap_;
+  BatchQueue<HeapEntry, CheaperFirst> queue_;
   // Entries a collapse made stale, roughly (the edges at its two ends). Nine in ten pops used to be
   // stale entries, each a full sift through a heap of millions; once they are a quarter of it, one
   // linear pass drops them all instead.
@@ -509,12 +509,12 @@ void Engine::push_edges(const std::vector<std::pair<Index, Index>>& edges) {
   if (n < (costly ? 4u : 4096u)) {
     auto& probes = probes_.local();
     for (const auto& [a, b] : edges)
-      if (const auto e = rate_edge(a, b, probes)) heap_.push(*e);
+      if (const auto e = rate_edge(a, b, probes)) queue_.push(*e);
     return;
   }
   rate_edges(edges);
   for (const auto& e : rated_)
-    if (e) heap_.push(*e);
+    if (e) queue_.push(*e);
 }
 
 void Engine::rate_edges(const std::vector<std::pair<Index, Index>>& edges) {
@@ -669,7 +669,7 @@ SimplifyResult Engine::run(Index target) {
     for (const auto& e : rated_)
       if (e) first.push_back(*e);
     rated_ = {};
-    heap_.load(std::move(first));
+    queue_.load(std::move(first));
   }
 
   const Index to_remove = std::max<Index>(1, s_.alive_faces - target);
@@ -677,15 +677,15 @@ SimplifyResult Engine::run(Index target) {
   // The best legal collapse, kept back when it would remove two faces and one is left to remove.
   std::optional<std::pair<Index, Index>> deferred;
   Candidate c;
-  while (s_.alive_faces > target && !heap_.empty()) {
-    if (4 * stale_estimate_ > heap_.size()) {
+  while (s_.alive_faces > target && !queue_.empty()) {
+    if (4 * stale_estimate_ > queue_.size()) {
       // The pop order stays the same: only entries the loop below would skip are dropped.
-      heap_.filter([&](const HeapEntry& e) { return e.version == version_[e.u] + version_[e.v]; });
+      queue_.filter([&](const HeapEntry& e) { return e.version == version_[e.u] + version_[e.v]; });
       stale_estimate_ = 0;
-      if (heap_.empty()) break;
+      if (queue_.empty()) break;
     }
-    const HeapEntry e = heap_.pop();
-    if (!heap_.empty()) prefetch_point(heap_.top().u), prefetch_point(heap_.top().v);
+    const HeapEntry e = queue_.pop();
+    if (!queue_.empty()) prefetch_point(queue_.top().u), prefetch_point(queue_.top().v);
     if (e.version != version_[e.u] + version_[e.v]) continue;  // stale
     if (e.epoch != dirty_[e.u] + dirty_[e.v]) {  // its neighbourhood changed: score it again
       push_edge(e.u, e.v);
@@ -695,7 +695,7 @@ SimplifyResult Engine::run(Index target) {
       // The best direction is illegal now; the other one may still be worth queueing.
       Candidate r;
       if (evaluate(e.v, e.u, r, true) == Rejection::None) {
-        heap_.push(entry(r.cost, e.v, e.u));
+        queue_.push(entry(r.cost, e.v, e.u));
       }
       continue;
     }

@@ -51,16 +51,17 @@ struct Quadric {
   /// neighbourhood leaves p free along the plane or the line) the directions Q does not constrain stay
   /// at the anchor. Returns false when Q constrains nothing.
   bool minimiser_near(const Eigen::Vector3d& anchor, Eigen::Vector3d& out, double regularisation = 1e-8) const {
-    if (const auto solved = well_conditioned_minimiser(out)) return *solved;
+    const Eigen::Matrix3d a = A();
+    if (const auto solved = well_conditioned_minimiser(a, out)) return *solved;
     // Minimise Q(p) + eps |p - anchor|^2. Along an eigenvector of A with eigenvalue lambda the step
     // from the anchor is scaled by lambda / (lambda + eps): all of it where Q constrains p, none where
     // it does not. The quadric cost used truncated_minimiser_near() before: the same idea with a hard
     // cut, but a trigonometric eigen-solve for 4 in 5 candidates on a scan. The errors were equal or
     // lower on five meshes at five targets each; eps = 1e-6 of the trace was worse on fandisk
     // (docs/benchmarks.md, "Engine speed-ups, session 9").
-    Eigen::Matrix3d r = A();
-    r.diagonal().array() += regularisation * r.trace();
-    out = anchor - r.inverse() * (A() * anchor + b());
+    Eigen::Matrix3d r = a;
+    r.diagonal().array() += regularisation * a.trace();
+    out = anchor - r.inverse() * (a * anchor + b());
     return out.allFinite();
   }
 
@@ -68,12 +69,13 @@ struct Quadric {
   /// the largest stay at the anchor's value. An eigen-solve; hoppe starts its local optimisation here
   /// (from the regularised point its RMS was higher on four of five meshes, and fandisk took 30 % longer).
   bool truncated_minimiser_near(const Eigen::Vector3d& anchor, Eigen::Vector3d& out, double relative_floor = 1e-6) const {
-    if (const auto solved = well_conditioned_minimiser(out)) return *solved;
+    const Eigen::Matrix3d a = A();
+    if (const auto solved = well_conditioned_minimiser(a, out)) return *solved;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(A());
+    eig.computeDirect(a);
     const Eigen::Vector3d& lambda = eig.eigenvalues();
     const double top = lambda.cwiseAbs().maxCoeff();
-    const Eigen::Vector3d gradient = A() * anchor + b();
+    const Eigen::Vector3d gradient = a * anchor + b();
     out = anchor;
     for (int i = 0; i < 3; ++i) {
       if (lambda[i] <= relative_floor * top) continue;
@@ -86,8 +88,7 @@ struct Quadric {
  private:
   /// The plain 3x3 solve where A is well conditioned (a corner-like neighbourhood): whether its result
   /// is finite. False where Q constrains nothing; nothing where A is too near singular for it.
-  std::optional<bool> well_conditioned_minimiser(Eigen::Vector3d& out) const {
-    const Eigen::Matrix3d a = A();
+  std::optional<bool> well_conditioned_minimiser(const Eigen::Matrix3d& a, Eigen::Vector3d& out) const {
     const double scale = a.trace();
     if (!(scale > 0)) return false;
     if (a.determinant() <= 1e-6 * scale * scale * scale) return std::nullopt;

@@ -13,7 +13,6 @@ class QuadHeap {
  public:
   bool empty() const { return items_.empty(); }
   std::size_t size() const { return items_.size(); }
-  void reserve(std::size_t n) { items_.reserve(n); }
   const T& top() const { return items_.front(); }
 
   void push(const T& item) {
@@ -88,13 +87,13 @@ class BatchQueue {
   const T& top() const { return from_run() ? run_[next_] : heap_.top(); }
   T pop() { return from_run() ? run_[next_++] : heap_.pop(); }
 
-  /// Drops the items `keep` rejects.
+  /// Drops the items `keep` rejects (and the sorted batch's items already read), in one pass.
   template <typename Keep>
   void filter(Keep keep) {
-    run_.erase(std::remove_if(run_.begin() + static_cast<std::ptrdiff_t>(next_), run_.end(),
-                              [&](const T& item) { return !keep(item); }),
-               run_.end());
-    run_.erase(run_.begin(), run_.begin() + static_cast<std::ptrdiff_t>(next_));
+    std::size_t kept = 0;
+    for (std::size_t i = next_; i < run_.size(); ++i)
+      if (keep(run_[i])) run_[kept++] = run_[i];
+    run_.resize(kept);
     next_ = 0;
     heap_.filter(keep);
   }
