@@ -25,6 +25,9 @@ enum class Rejection { None, Locked, Topology, Boundary, Seam, Flip, Sliver, Err
 
 // 20 bytes: the queue holds millions of these and its speed is its cache footprint. Counters only
 // grow, so a sum changes whenever either of its terms does.
+// How many entries whose neighbourhood changed are re-scored at once (wide updates).
+constexpr std::size_t kRescoreBatch = 16;
+
 struct HeapEntry {
   float cost;
   Index u, v;
@@ -76,9 +79,6 @@ class Engine {
   Rejection evaluate(Index u, Index v, Candidate& c, bool full);
   /// The queue entry of edge ab, in its cheaper legal direction, if either is (thread-safe).
   std::optional<HeapEntry> rate_edge(Index a, Index b, std::array<Probe, 2>& probes);
-  void push_edge(Index a, Index b) {
-    if (const auto e = rate_edge(a, b, probes_.local())) queue_.push(*e);
-  }
   /// Rates the edges (side by side when they are many, or costly) and queues them in list order, so
   /// the queue is the same whatever the number of threads.
   void push_edges(const std::vector<std::pair<Index, Index>>& edges);
@@ -122,7 +122,7 @@ class Engine {
   std::vector<Index> ring_u_, ring_v_, ring_tmp_;
   tbb::enumerable_thread_specific<std::array<Probe, 2>> probes_;
   std::vector<std::optional<HeapEntry>> rated_;
-  std::vector<std::pair<Index, Index>> ring_edges_;
+  std::vector<std::pair<Index, Index>> ring_edges_, rescore_;
   // Result bookkeeping.
   double max_error_ = 0;
   Index collapses_ = 0, locked_ = 0, dropped_ = 0;
@@ -687,8 +687,21 @@ SimplifyResult Engine::run(Index target) {
     const HeapEntry e = queue_.pop();
     if (!queue_.empty()) prefetch_point(queue_.top().u), prefetch_point(queue_.top().v);
     if (e.version != version_[e.u] + version_[e.v]) continue;  // stale
-    if (e.epoch != dirty_[e.u] + dirty_[e.v]) {  // its neighbourhood changed: score it again
-      push_edge(e.u, e.v);
+    if (e.epoch != dirty_[e.u] + dirty_[e.v]) {
+      // Its neighbourhood changed: score it again, with the other such entries at the top of the
+      // queue (up to the first up-to-date one), side by side.
+      rescore_.assign(1, {e.u, e.v});
+      while (!queue_.empty() && rescore_.size() < kRescoreBatch) {
+        const HeapEntry& t = queue_.top();
+        if (t.version != version_[t.u] + version_[t.v]) {
+          queue_.pop();
+          continue;
+        }
+        if (t.epoch == dirty_[t.u] + dirty_[t.v]) break;
+        rescore_.push_back({t.u, t.v});
+        queue_.pop();
+      }
+      push_edges(rescore_);
       continue;
     }
     if (evaluate(e.u, e.v, c, true) != Rejection::None) {
