@@ -92,7 +92,8 @@ TEST(Simplify, OneFaceLeftTakesABoundaryEdgeOrLandsOneBelow) {
 
 TEST(Simplify, SameResultForAnyNumberOfThreads) {
   // Candidates are scored side by side (every edge at the start; hoppe's re-scored rings after each
-  // collapse) but queued in a fixed order, so the collapses cannot depend on the threads.
+  // collapse, and its batches of entries whose neighbourhood changed) but queued in a fixed order, so
+  // the collapses cannot depend on the threads.
   Mesh m = make_icosphere({.subdivisions = 4});  // 7,680 edges: enough for the parallel start
   std::mt19937 random(11);
   std::uniform_real_distribution<double> bump(0.98, 1.02);
