@@ -28,6 +28,7 @@ struct SimplifyCliOptions {
   double feature_angle = 30.0, aspect_ratio = 0.1;
   bool accumulate_error = false;
   std::uint64_t seed = 1;
+  double hoppe_samples = SimplifyOptions{}.hoppe_points_per_face;
 };
 
 // "0.5" is absolute; "0.5%" is a percentage of the bounding-box diagonal.
@@ -102,6 +103,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     s.attribute_weights = {o.attribute_weights[0], o.attribute_weights[1], o.attribute_weights[2]};
   }
   s.seed = o.seed;
+  s.hoppe_points_per_face = o.hoppe_samples;
   const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
   if (show_progress)
     s.progress = [](double f) {
@@ -180,6 +182,9 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_flag("--accumulate-error", opt->accumulate_error, "schroeder: add each removal's error to its neighbours");
   sub->add_option("--seed", opt->seed, "Seed for hoppe's surface samples")->capture_default_str();
+  sub->add_option("--hoppe-samples", opt->hoppe_samples,
+                  "hoppe: random surface points per face besides the vertices (raise for CAD meshes of thin triangles)")
+      ->check(CLI::Range(0.0, 1000.0))->capture_default_str();
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
@@ -189,6 +194,7 @@ Examples:
   lodkit simplify part.stl -o part_lo.stl --max-error 0.1% --lock-boundary
   lodkit simplify spot.obj -o spot_small.obj --ratio 0.1 --attribute-weights 0,1,0
   lodkit simplify part.obj -o part_lo.obj --method schroeder --max-error 0.05% --feature-angle 30
+  lodkit simplify fandisk.obj -o fandisk_lo.ply --ratio 0.1 --method hoppe --hoppe-samples 5
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};
 }

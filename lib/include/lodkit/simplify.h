@@ -73,7 +73,9 @@ struct SimplifyOptions {
   /// wedges then also take the attribute values that minimise the error.
   AttributeWeights attribute_weights{};
 
-  /// Hoppe: random points sampled per input face (besides the vertices), and the seed.
+  /// Hoppe: random points sampled per input face (besides the vertices), and the seed. Raise it for CAD
+  /// meshes of long thin triangles: with few points per face the paper's spring schedule keeps the
+  /// springs strong, and they pull vertices off creases (docs/benchmarks.md, "Session 10").
   double hoppe_points_per_face = 1.0;
   std::uint64_t seed = 1;
 

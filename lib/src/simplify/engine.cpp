@@ -814,6 +814,9 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
     throw Error(fmt::format("simplify: max error must not be negative, got {}", *options.max_error));
   if (!(options.max_normal_change_deg > 0 && options.max_normal_change_deg <= 180))
     throw Error("simplify: max normal change must be in (0, 180] degrees");
+  if (!(options.hoppe_points_per_face >= 0 && options.hoppe_points_per_face <= 1000))
+    throw Error(fmt::format("simplify: hoppe's random points per face must be between 0 and 1000, got {}",
+                            options.hoppe_points_per_face));
   Index target = 0;
   if (!options.target_faces && !options.target_ratio && !options.max_error) target = mesh.num_faces() / 2;
   if (options.target_faces) target = std::max(target, *options.target_faces);
