@@ -23,11 +23,11 @@ namespace {
 // Why a candidate collapse was refused. The final report counts these over the edges left.
 enum class Rejection { None, Locked, Topology, Boundary, Seam, Flip, Sliver, ErrorLimit, Cost, kCount };
 
-// 20 bytes: the queue holds millions of these and its speed is its cache footprint. Counters only
-// grow, so a sum changes whenever either of its terms does.
 // How many entries whose neighbourhood changed are re-scored at once (wide updates).
 constexpr std::size_t kRescoreBatch = 16;
 
+// 20 bytes: the queue holds millions of these and its speed is its cache footprint. Counters only
+// grow, so a sum changes whenever either of its terms does.
 struct HeapEntry {
   float cost;
   Index u, v;
@@ -87,6 +87,10 @@ class Engine {
   HeapEntry entry(double cost, Index u, Index v) const {
     return {static_cast<float>(cost), u, v, version_[u] + version_[v], dirty_[u] + dirty_[v]};
   }
+  /// An endpoint changed since e was scored: e is void.
+  bool stale(const HeapEntry& e) const { return e.version != version_[e.u] + version_[e.v]; }
+  /// An endpoint's neighbourhood changed since e was scored (wide updates): score it again.
+  bool outdated(const HeapEntry& e) const { return e.epoch != dirty_[e.u] + dirty_[e.v]; }
   void collapse(Index u, Index v, const Candidate& c);
   /// Asks for point p's data before it is needed: the loop is bound by cache misses on points
   /// scattered over a large mesh, and asking for several at once overlaps them.
@@ -680,24 +684,24 @@ SimplifyResult Engine::run(Index target) {
   while (s_.alive_faces > target && !queue_.empty()) {
     if (4 * stale_estimate_ > queue_.size()) {
       // The pop order stays the same: only entries the loop below would skip are dropped.
-      queue_.filter([&](const HeapEntry& e) { return e.version == version_[e.u] + version_[e.v]; });
+      queue_.filter([&](const HeapEntry& e) { return !stale(e); });
       stale_estimate_ = 0;
       if (queue_.empty()) break;
     }
     const HeapEntry e = queue_.pop();
     if (!queue_.empty()) prefetch_point(queue_.top().u), prefetch_point(queue_.top().v);
-    if (e.version != version_[e.u] + version_[e.v]) continue;  // stale
-    if (e.epoch != dirty_[e.u] + dirty_[e.v]) {
+    if (stale(e)) continue;
+    if (outdated(e)) {
       // Its neighbourhood changed: score it again, with the other such entries at the top of the
       // queue (up to the first up-to-date one), side by side.
       rescore_.assign(1, {e.u, e.v});
       while (!queue_.empty() && rescore_.size() < kRescoreBatch) {
         const HeapEntry& t = queue_.top();
-        if (t.version != version_[t.u] + version_[t.v]) {
+        if (stale(t)) {
           queue_.pop();
           continue;
         }
-        if (t.epoch == dirty_[t.u] + dirty_[t.v]) break;
+        if (!outdated(t)) break;
         rescore_.push_back({t.u, t.v});
         queue_.pop();
       }

@@ -133,15 +133,6 @@ class HoppeScorer {
     return true;
   }
 
-  // Squared lower bound of the distance from x to triangle t: the distance to its plane, combined at
-  // right angles with how far x lies outside the planes through its edges.
-  static double bound2(const Tri& t, const Eigen::Vector3d& x) {
-    const double plane = t.normal.dot(x) - t.offset;
-    const double outside = std::max({0.0, t.edge_normal[0].dot(x) - t.edge_offset[0],
-                                     t.edge_normal[1].dot(x) - t.edge_offset[1], t.edge_normal[2].dot(x) - t.edge_offset[2]});
-    return plane * plane + outside * outside;
-  }
-
   // The nearest point to x on the new star (merged vertex at p), into nearest_ for every point. The
   // triangle a point's face becomes (its `home`) is nearly always the nearest, so it goes first and its
   // distance rules out nearly every other one. A point of a vanishing face has no home: the triangle
@@ -153,12 +144,15 @@ class HoppeScorer {
       std::size_t end = j + 1;
       while (end < points_.size() && home_[end] == home) ++end;
       if (home < 0) {
+        others_.resize(tri_.size());
+        for (std::size_t k = 0; k < tri_.size(); ++k) others_[k] = k;
+        load_planes();
         for (; j < end; ++j) nearest_[j] = nearest_homeless(point_[points_[j]], p, solve);
         continue;
       }
       // The points of one face, all near their home triangle: the other triangles that can be nearer
-      // than home for any of them are found once for the group (on a CAD fan of 30 triangles, testing
-      // each point against each triangle was 80 % of the time). A triangle t is out if
+      // than home for any of them are found once for the group (on fandisk, where a star averages 47
+      // triangles, testing each point against each triangle was 80 % of the time). A triangle t is out if
       // B(c) - r >= max home distance, where B (the larger of the distances to t's plane and outside
       // its edge planes) is a 1-Lipschitz lower bound of the distance to t, c the group's centre and
       // r its radius. Which triangles are tried, and in which order, is otherwise unchanged.
@@ -178,19 +172,8 @@ class HoppeScorer {
         const std::size_t k = n == std::size_t(home) ? 0 : n;
         if (lipschitz_bound(tri_[k], centre) < reach) others_.push_back(k);
       }
-      // Their planes side by side, so that one point's bounds against all of them vectorise.
+      load_planes();
       const std::size_t m = others_.size();
-      planes_.resize(16 * m);
-      bounds_.resize(m);
-      for (std::size_t i = 0; i < m; ++i) {
-        const Tri& t = tri_[others_[i]];
-        for (int c = 0; c < 3; ++c) {
-          planes_[c * m + i] = t.normal[c];
-          for (int e = 0; e < 3; ++e) planes_[(4 + 4 * e + c) * m + i] = t.edge_normal[e][c];
-        }
-        planes_[3 * m + i] = t.offset;
-        for (int e = 0; e < 3; ++e) planes_[(7 + 4 * e) * m + i] = t.edge_offset[e];
-      }
       for (; j < end; ++j) {
         const Eigen::Vector3d& x = point_[points_[j]];
         Nearest& out = nearest_[j];
@@ -204,8 +187,26 @@ class HoppeScorer {
     }
   }
 
-  // bound2() of x against m triangles whose planes are laid out as rows of m: normal x, y, z, offset,
-  // then each edge plane's x, y, z, offset.
+  // The planes of the triangles in others_, side by side (see lower_bounds2), so that one point's
+  // bounds against all of them vectorise.
+  void load_planes() {
+    const std::size_t m = others_.size();
+    planes_.resize(16 * m);
+    bounds_.resize(m);
+    for (std::size_t i = 0; i < m; ++i) {
+      const Tri& t = tri_[others_[i]];
+      for (int c = 0; c < 3; ++c) {
+        planes_[c * m + i] = t.normal[c];
+        for (int e = 0; e < 3; ++e) planes_[(4 + 4 * e + c) * m + i] = t.edge_normal[e][c];
+      }
+      planes_[3 * m + i] = t.offset;
+      for (int e = 0; e < 3; ++e) planes_[(7 + 4 * e) * m + i] = t.edge_offset[e];
+    }
+  }
+
+  // Squared lower bounds of the distance from x to m triangles, into out: the distance to each one's
+  // plane, combined at right angles with how far x lies outside the planes through its edges. The
+  // planes are laid out as rows of m: normal x, y, z, offset, then each edge plane's x, y, z, offset.
   LODKIT_AVX2_CLONE static void lower_bounds2(const double* __restrict planes, std::size_t m,
                                               const Eigen::Vector3d& x, double* __restrict out) {
     const double x0 = x[0], x1 = x[1], x2 = x[2];
@@ -231,15 +232,16 @@ class HoppeScorer {
                      t.edge_normal[1].dot(x) - t.edge_offset[1], t.edge_normal[2].dot(x) - t.edge_offset[2]});
   }
 
+  // A point of a vanishing face, with the planes of every star triangle loaded (load_planes).
   Nearest nearest_homeless(const Eigen::Vector3d& x, const Eigen::Vector3d& p, bool solve) {
+    lower_bounds2(planes_.data(), tri_.size(), x, bounds_.data());
     std::size_t first = 0;
-    bound2_.resize(tri_.size());
-    for (std::size_t k = 0; k < tri_.size(); ++k)
-      if ((bound2_[k] = bound2(tri_[k], x)) < bound2_[first]) first = k;
+    for (std::size_t k = 1; k < tri_.size(); ++k)
+      if (bounds_[k] < bounds_[first]) first = k;
     Nearest out{INFINITY, 0.0, Eigen::Vector3d::Zero()};
     for (std::size_t n = 0; n < tri_.size(); ++n) {
       const std::size_t k = n == 0 ? first : n == first ? 0 : n;
-      if (n > 0 && bound2_[k] >= out.d2) continue;
+      if (n > 0 && bounds_[k] >= out.d2) continue;
       const Nearest c = on_triangle(x, tri_[k], p, solve);
       if (c.d2 < out.d2) out = c;
     }
@@ -328,9 +330,8 @@ class HoppeScorer {
   std::size_t point_count_ = 0;
   std::vector<std::array<Index, 3>> star_;
   std::vector<Tri> tri_;
-  std::vector<double> bound2_;  ///< nearest_homeless()'s bounds
   std::vector<Nearest> nearest_;  ///< per point of points_: its projection onto the new star
-  std::vector<std::size_t> others_;  ///< the triangles besides home that a group's points try
+  std::vector<std::size_t> others_;  ///< the triangles a group's points try besides home (all, for no home)
   std::vector<double> planes_, bounds_;  ///< others_' planes (see lower_bounds2) and one point's bounds
   struct Projection {
     Index point;
