@@ -307,6 +307,7 @@ TEST(Simplify, BadOptionsAreErrors) {
   EXPECT_THROW(simplify(m, {.target_ratio = 1.5}), Error);
   EXPECT_THROW(simplify(m, {.target_faces = -3}), Error);
   EXPECT_THROW(simplify(m, {.max_error = -1.0}), Error);
+  EXPECT_THROW(simplify(m, {.lane_faces = -1}), Error);
   SimplifyOptions hoppe{.method = SimplifyMethod::Hoppe};
   for (const double bad : {-1.0, std::nan(""), 1e6}) {
     hoppe.hoppe_points_per_face = bad;

@@ -29,6 +29,7 @@ struct SimplifyCliOptions {
   bool accumulate_error = false;
   std::uint64_t seed = 1;
   double hoppe_samples = SimplifyOptions{}.hoppe_points_per_face;
+  Index lane_faces = SimplifyOptions{}.lane_faces;
 };
 
 // "0.5" is absolute; "0.5%" is a percentage of the bounding-box diagonal.
@@ -104,6 +105,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   }
   s.seed = o.seed;
   s.hoppe_points_per_face = o.hoppe_samples;
+  s.lane_faces = o.lane_faces;
   const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
   if (show_progress)
     s.progress = [](double f) {
@@ -127,7 +129,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                      {"error_estimate_percent", r.error * pct},
                      {"reason", r.reason == StopReason::TargetReached ? "target" :
                                 r.reason == StopReason::ErrorLimit ? "error-limit" : "no-legal-collapse"},
-                     {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}};
+                     {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}, {"lanes", r.lanes}};
     if (measured)
       j["measured"] = {{"hausdorff", measured->hausdorff}, {"hausdorff_percent", measured->percent(measured->hausdorff)},
                        {"rms", measured->rms}, {"rms_percent", measured->percent(measured->rms)},
@@ -139,6 +141,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                thousands(r.faces_in), thousands(r.faces_out), thousands(r.vertices_in), thousands(r.vertices_out),
                r.seconds);
     fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
+    if (r.lanes > 1) fmt::print(stderr, "  {} slabs simplified side by side, then one queue for the rest\n", r.lanes);
     if (measured)
       fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%)\n", measured->hausdorff,
                  measured->percent(measured->hausdorff), measured->rms, measured->percent(measured->rms));
@@ -185,6 +188,10 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--hoppe-samples", opt->hoppe_samples,
                   "hoppe: random surface points per face besides the vertices (raise for CAD meshes of thin triangles)")
       ->check(CLI::Range(0.0, 1000.0))->capture_default_str();
+  sub->add_option("--lane-faces", opt->lane_faces,
+                  "Large meshes are first simplified in slabs of about this many faces side by side (quadric, "
+                  "edge-length; 0 = one queue throughout)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).

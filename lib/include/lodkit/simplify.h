@@ -79,6 +79,11 @@ struct SimplifyOptions {
   double hoppe_points_per_face = 1.0;
   std::uint64_t seed = 1;
 
+  /// Meshes of at least twice this many faces are first simplified in slabs of about this many faces,
+  /// side by side (up to 8; quadric and edge-length, when no collapses are recorded): a slab's rim waits
+  /// for the end, when one queue finishes the job. The result does not depend on the thread count. 0 = never.
+  Index lane_faces = 125000;
+
   bool record_collapses = false;
   /// Called with the fraction done (0..1), at most about 100 times.
   std::function<void(double)> progress{};
@@ -117,6 +122,7 @@ struct SimplifyResult {
   std::string reason_text;          ///< one human sentence: why it stopped where it did
   Index locked_vertices = 0;        ///< on non-manifold edges or fans (or the boundary when locked)
   Index dropped_degenerate_faces = 0;
+  int lanes = 1;                    ///< slabs simplified side by side first (see lane_faces), or 1
   double seconds = 0.0;
   std::vector<Index> vertex_origin; ///< for each output vertex, its input vertex
   std::vector<CollapseRecord> records;

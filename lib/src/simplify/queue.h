@@ -26,6 +26,9 @@ class QuadHeap {
     }
   }
 
+  /// Moves every item out, in no particular order, and leaves the heap empty.
+  std::vector<T> take() { return std::exchange(items_, {}); }
+
   /// Drops the items `keep` rejects and restores the heap order in linear time (Floyd).
   template <typename Keep>
   void filter(Keep keep) {
@@ -86,6 +89,16 @@ class BatchQueue {
 
   const T& top() const { return from_run() ? run_[next_] : heap_.top(); }
   T pop() { return from_run() ? run_[next_++] : heap_.pop(); }
+
+  /// Moves every item out, in no particular order, and leaves the queue empty.
+  std::vector<T> take() {
+    std::vector<T> out(run_.begin() + static_cast<std::ptrdiff_t>(next_), run_.end());
+    const std::vector<T> rest = heap_.take();
+    out.insert(out.end(), rest.begin(), rest.end());
+    run_.clear();
+    next_ = 0;
+    return out;
+  }
 
   /// Drops the items `keep` rejects (and the sorted batch's items already read), in one pass.
   template <typename Keep>

@@ -1,0 +1,51 @@
+#include "simplify/slabs.h"
+
+#include <algorithm>
+
+namespace lodkit::detail {
+
+Slabs cut_into_slabs(const EngineState& s, Index count) {
+  Eigen::AlignedBox3d box;
+  for (const auto& p : s.position) box.extend(p);
+  int axis = 0;
+  box.diagonal().maxCoeff(&axis);
+  const Index faces = static_cast<Index>(s.face.size());
+  std::vector<double> centre(static_cast<std::size_t>(faces), 0.0);  // three times the centroid's
+  std::vector<double> sorted;
+  sorted.reserve(static_cast<std::size_t>(s.alive_faces));
+  for (Index f = 0; f < faces; ++f) {
+    if (s.face_dead[f]) continue;
+    for (int k = 0; k < 3; ++k) centre[f] += s.position[s.corner_point(f, k)][axis];
+    sorted.push_back(centre[f]);
+  }
+  // The cuts: the face centres at 1/count, 2/count, ... of the way, each selection on what is left.
+  std::vector<double> cut;
+  for (auto from = sorted.begin(); static_cast<Index>(cut.size()) + 1 < count;) {
+    const auto at = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * (cut.size() + 1) / std::size_t(count));
+    std::nth_element(from, at, sorted.end());
+    cut.push_back(*at);
+    from = at;
+  }
+
+  Slabs out;
+  out.faces.assign(static_cast<std::size_t>(count), 0);
+  out.region.assign(s.position.size(), -2);
+  std::vector<Index> slab_of(static_cast<std::size_t>(faces), -1);
+  for (Index f = 0; f < faces; ++f) {
+    if (s.face_dead[f]) continue;
+    const Index slab = static_cast<Index>(std::upper_bound(cut.begin(), cut.end(), centre[f]) - cut.begin());
+    slab_of[f] = slab;
+    ++out.faces[slab];
+    for (int k = 0; k < 3; ++k) {
+      Index& r = out.region[s.corner_point(f, k)];
+      r = r == -2 || r == slab ? slab : -1;
+    }
+  }
+  for (Index f = 0; f < faces; ++f)
+    if (slab_of[f] >= 0 && (out.region[s.corner_point(f, 0)] < 0 || out.region[s.corner_point(f, 1)] < 0 ||
+                            out.region[s.corner_point(f, 2)] < 0))
+      ++out.rim_faces;
+  return out;
+}
+
+}  // namespace lodkit::detail
