@@ -137,6 +137,18 @@ TEST(CliSimplify, EveryMethodEndToEndWithJsonAndMeasure) {
   EXPECT_NE(compared.out.find("Hausdorff"), std::string::npos);
 }
 
+TEST(CliSimplify, LanesAreReportedAndCanBeTurnedOff) {
+  test::ScratchDir dir("cli-simplify-lanes");
+  ASSERT_EQ(run(dir, "generate torus -o t.ply --tolerance 0.0005").status, 0);
+  CliRun r = run(dir, "simplify t.ply -o s.ply --ratio 0.05 --lane-faces 2000");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("slabs simplified side by side"), std::string::npos) << r.err;
+  r = run(dir, "simplify t.ply -o s.ply --ratio 0.05 --lane-faces 0 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("\"lanes\": 1"), std::string::npos) << r.out;
+  EXPECT_EQ(run(dir, "simplify t.ply -o s.ply --lane-faces -1").status, 2);
+}
+
 TEST(CliSimplify, ReasonIsPrintedWhenTheTargetIsOutOfReach) {
   test::ScratchDir dir("cli-simplify");
   ASSERT_EQ(run(dir, "generate box -o b.ply --divisions 4").status, 0);
