@@ -121,10 +121,10 @@ class Engine {
   void collapse(Lane& lane, Index u, Index v, const Candidate& c);
   /// Pops and collapses until `done` says stop or the queue runs dry: the loop of every lane.
   template <typename Done>
-  void drain(Lane& lane, Index target, Done done, std::optional<std::pair<Index, Index>>& deferred);
+  void drain(Lane& lane, Done done, std::optional<std::pair<Index, Index>>& deferred);
   /// The lanes' part of the run (see the comment there), from the first rating of every edge; returns
   /// false (and leaves `first` alone) when the mesh is too small for lanes.
-  bool run_lanes(Index target, std::vector<HeapEntry>& first);
+  bool run_lanes(std::vector<HeapEntry>& first);
   /// The queue entries of these edges, rated side by side, in list order.
   std::vector<HeapEntry> rate_all(const std::vector<std::pair<Index, Index>>& edges);
   /// Calls the progress callback, about once a percent, with `alive` faces left.
@@ -159,7 +159,8 @@ class Engine {
   // Result bookkeeping.
   double max_error_ = 0;
   Index collapses_ = 0, locked_ = 0, dropped_ = 0;
-  Index faces_before_ = 0, target_ = 0, next_report_ = 0;  // for the progress callback
+  Index target_ = 0;  // the run's face target
+  Index faces_before_ = 0, next_report_ = 0;  // for the progress callback
   int lanes_used_ = 1;
   std::vector<CollapseRecord> records_;
   std::vector<double> attribute_scale_;     // per attribute dimension: weight x diagonal
@@ -694,7 +695,7 @@ std::string Engine::stop_report(Index target, bool& error_limited) {
 }
 
 template <typename Done>
-void Engine::drain(Lane& lane, Index target, Done done, std::optional<std::pair<Index, Index>>& deferred) {
+void Engine::drain(Lane& lane, Done done, std::optional<std::pair<Index, Index>>& deferred) {
   auto& queue = lane.queue;
   Candidate c;
   while (!queue.empty() && !done()) {
@@ -730,7 +731,7 @@ void Engine::drain(Lane& lane, Index target, Done done, std::optional<std::pair<
       if (evaluate(lane, e.v, e.u, r, true) == Rejection::None) queue.push(entry(r.cost, e.v, e.u));
       continue;
     }
-    if (lane.region < 0 && s_.alive_faces - static_cast<Index>(lane.probe.shared.size()) < target) {
+    if (lane.region < 0 && s_.alive_faces - static_cast<Index>(lane.probe.shared.size()) < target_) {
       deferred = {e.u, e.v};
       break;
     }
@@ -748,7 +749,8 @@ void Engine::drain(Lane& lane, Index target, Done done, std::optional<std::pair<
 // lane finished first: the result is the same for any number of threads. When 90 % of the collapses
 // are done, or a lane reaches its share of the target, the one queue takes over for the rest, rims
 // included.
-bool Engine::run_lanes(Index target, std::vector<HeapEntry>& first) {
+bool Engine::run_lanes(std::vector<HeapEntry>& first) {
+  const Index target = target_;
   const Index alive = s_.alive_faces;
   const Index count = o_.lane_faces > 0 ? std::min<Index>(kMaxLanes, alive / o_.lane_faces) : 0;
   if (count < 2 || o_.record_collapses || cost_->wide_update()) return false;
@@ -785,7 +787,7 @@ bool Engine::run_lanes(Index target, std::vector<HeapEntry>& first) {
       if (lane.done) return;
       std::optional<std::pair<Index, Index>> unused;
       auto at_floor = [&] { return lane_alive(lane) < lane.floor + 2; };  // a collapse removes up to two
-      drain(lane, target, [&] { return at_floor() || lane.queue.top().cost > threshold; }, unused);
+      drain(lane, [&] { return at_floor() || lane.queue.top().cost > threshold; }, unused);
       lane.done = lane.queue.empty() || at_floor();
     });
     total = alive;
@@ -859,11 +861,11 @@ SimplifyResult Engine::run(Index target) {
       if (e.faces <= 2) edges.push_back({e.lo, e.hi});
     edges_ = {};
     std::vector<HeapEntry> first = rate_all(edges);
-    if (!run_lanes(target, first)) main_.queue.load(std::move(first));
+    if (!run_lanes(first)) main_.queue.load(std::move(first));
   }
   // The best legal collapse, kept back when it would remove two faces and one is left to remove.
   std::optional<std::pair<Index, Index>> deferred;
-  drain(main_, target, [&] { return s_.alive_faces <= target; }, deferred);
+  drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
   Candidate c;
   if (s_.alive_faces > target && deferred) {
     // Only a boundary edge removes exactly one face. Look for the cheapest directly: draining the

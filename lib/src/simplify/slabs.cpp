@@ -30,11 +30,9 @@ Slabs cut_into_slabs(const EngineState& s, Index count) {
   Slabs out;
   out.faces.assign(static_cast<std::size_t>(count), 0);
   out.region.assign(s.position.size(), -2);
-  std::vector<Index> slab_of(static_cast<std::size_t>(faces), -1);
   for (Index f = 0; f < faces; ++f) {
     if (s.face_dead[f]) continue;
     const Index slab = static_cast<Index>(std::upper_bound(cut.begin(), cut.end(), centre[f]) - cut.begin());
-    slab_of[f] = slab;
     ++out.faces[slab];
     for (int k = 0; k < 3; ++k) {
       Index& r = out.region[s.corner_point(f, k)];
@@ -42,7 +40,7 @@ Slabs cut_into_slabs(const EngineState& s, Index count) {
     }
   }
   for (Index f = 0; f < faces; ++f)
-    if (slab_of[f] >= 0 && (out.region[s.corner_point(f, 0)] < 0 || out.region[s.corner_point(f, 1)] < 0 ||
+    if (!s.face_dead[f] && (out.region[s.corner_point(f, 0)] < 0 || out.region[s.corner_point(f, 1)] < 0 ||
                             out.region[s.corner_point(f, 2)] < 0))
       ++out.rim_faces;
   return out;
