@@ -124,19 +124,19 @@ std::vector<Index> identical_vertex_classes(const Mesh& mesh) {
   }
   auto row = [&](Index v) { return records.begin() + static_cast<std::ptrdiff_t>(k * static_cast<std::size_t>(v)); };
   auto same = [&](Index i, Index j) { return std::equal(row(i), row(i) + k, row(j)); };
-  std::vector<Index> order(static_cast<std::size_t>(n));
-  std::iota(order.begin(), order.end(), 0);
-  // Equal records end up together, lowest index first.
-  std::sort(order.begin(), order.end(), [&](Index i, Index j) {
-    const auto [x, y] = std::mismatch(row(i), row(i) + k, row(j));
-    return x != row(i) + k ? *x < *y : i < j;
-  });
+  // Open addressing, linear probing, each slot the first (lowest) vertex of its class: a sort of all
+  // records was the largest step of a 1M-face simplification's setup.
+  std::size_t capacity = 16;
+  while (capacity < 2 * static_cast<std::size_t>(n)) capacity *= 2;
+  std::vector<Index> slot(capacity, -1);
   std::vector<Index> representative(static_cast<std::size_t>(n));
-  for (std::size_t i = 0; i < order.size();) {
-    std::size_t j = i;
-    while (j < order.size() && same(order[j], order[i])) ++j;
-    for (std::size_t m = i; m < j; ++m) representative[order[m]] = order[i];
-    i = j;
+  for (Index v = 0; v < n; ++v) {
+    std::uint64_t h = 0;
+    for (auto r = row(v); r != row(v) + k; ++r) h = detail::mix64(h ^ *r);
+    std::size_t i = h & (capacity - 1);
+    while (slot[i] >= 0 && !same(slot[i], v)) i = (i + 1) & (capacity - 1);
+    if (slot[i] < 0) slot[i] = v;
+    representative[v] = slot[i];
   }
   return representative;
 }

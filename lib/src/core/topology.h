@@ -12,6 +12,7 @@ struct EdgeUse {
   Index lo, hi;  // endpoints, lo < hi
   int faces;     // how many faces use the edge
   bool consistent;  // for two faces: traversed in opposite directions
+  Index face[2];    // the first two faces using it (indices into `faces`; -1 when fewer)
 };
 
 /// Every undirected edge of `faces` once, sorted by (lo, hi).

@@ -7,7 +7,11 @@ namespace lodkit::detail {
 /// Disjoint sets with path halving and union by size.
 class UnionFind {
  public:
-  explicit UnionFind(std::size_t n) : parent_(n), size_(n, 1) {
+  explicit UnionFind(std::size_t n = 0) { reset(n); }
+  /// n singletons again, reusing the storage (for many small problems in a row).
+  void reset(std::size_t n) {
+    parent_.resize(n);
+    size_.assign(n, 1);
     std::iota(parent_.begin(), parent_.end(), 0);
   }
   int find(int x) {
