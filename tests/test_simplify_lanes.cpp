@@ -8,6 +8,8 @@
 
 #include <tbb/global_control.h>
 
+#include "core/topology.h"
+#include "simplify/slabs.h"
 #include "test_util.h"
 
 namespace lodkit {
@@ -71,6 +73,66 @@ TEST(SimplifyLanes, SameResultForAnyNumberOfThreads) {
   EXPECT_EQ(one.mesh.positions, many.mesh.positions);
   EXPECT_EQ(one.mesh.triangles, many.mesh.triangles);
   EXPECT_EQ(one.error, many.error);
+}
+
+// The engine state cut_into_slabs reads: positions and faces on points (here one wedge per point).
+detail::EngineState slab_state(const Mesh& m) {
+  detail::EngineState s;
+  for (Index v = 0; v < m.num_vertices(); ++v) s.position.push_back(m.positions.row(v).transpose());
+  for (Index f = 0; f < m.num_faces(); ++f) {
+    s.face.push_back({m.triangles(f, 0), m.triangles(f, 1), m.triangles(f, 2)});
+    s.face_point.push_back(s.face.back());
+    s.face_dead.push_back(0);
+  }
+  s.alive_faces = m.num_faces();
+  return s;
+}
+
+TEST(Slabs, ShiftedCutsPutTheFirstRimsInsideSlabs) {
+  const Mesh grid = make_grid({.size = {4.0, 1.0}, .divisions_x = 80, .divisions_y = 20});  // longest side: x
+  const detail::EngineState s = slab_state(grid);
+  const detail::Slabs plain = detail::cut_into_slabs(s, 4), shifted = detail::cut_into_slabs(s, 4, true);
+  ASSERT_EQ(plain.faces.size(), 4u);
+  ASSERT_EQ(shifted.faces.size(), 5u);
+  Index sum_plain = 0, sum_shifted = 0;
+  for (Index f : plain.faces) sum_plain += f;
+  for (Index f : shifted.faces) sum_shifted += f;
+  EXPECT_EQ(sum_plain, grid.num_faces());
+  EXPECT_EQ(sum_shifted, grid.num_faces());
+  // Equal slabs; the shifted cut's two end slabs are half as thick (one column of faces may lean).
+  const Index quarter = grid.num_faces() / 4, column = 2 * 20;
+  for (Index f : plain.faces) EXPECT_NEAR(f, quarter, column);
+  EXPECT_NEAR(shifted.faces.front(), quarter / 2, column);
+  EXPECT_NEAR(shifted.faces.back(), quarter / 2, column);
+  for (std::size_t i = 1; i + 1 < shifted.faces.size(); ++i) EXPECT_NEAR(shifted.faces[i], quarter, column);
+  // Every rim point of the first cut lies inside a slab of the second, so the second pass can
+  // collapse what the first had to leave.
+  Index rims = 0;
+  for (std::size_t p = 0; p < plain.region.size(); ++p)
+    if (plain.region[p] == -1) {
+      ++rims;
+      EXPECT_GE(shifted.region[p], 0) << "point " << p;
+    }
+  EXPECT_EQ(rims, 3 * 21);  // three cuts across a column of 21 points each
+}
+
+TEST(ClassifyEdges, NamesTheFacesOfEachEdge) {
+  // Two triangles on a square's diagonal, then a third on one border edge of the first.
+  const std::vector<std::array<Index, 3>> faces{{0, 1, 2}, {0, 2, 3}, {1, 0, 4}};
+  for (const detail::EdgeUse& e : detail::classify_edges(faces)) {
+    std::vector<Index> expected;
+    for (Index f = 0; f < 3; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const Index a = faces[f][k], b = faces[f][(k + 1) % 3];
+        if (std::min(a, b) == e.lo && std::max(a, b) == e.hi) expected.push_back(f);
+      }
+    ASSERT_EQ(static_cast<int>(expected.size()), e.faces);
+    std::vector<Index> got{e.face[0]};
+    if (e.faces > 1) got.push_back(e.face[1]);
+    else EXPECT_EQ(e.face[1], -1);
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, expected) << e.lo << "-" << e.hi;
+  }
 }
 
 }  // namespace

@@ -86,7 +86,7 @@ class Engine {
  private:
   void setup(const Mesh& mesh);
   void setup_attributes(const Mesh& mesh);
-  void add_crease_planes();
+  void add_crease_planes(const std::vector<Index>& face_id);
   // Checks are split by cost: the cheap ones (flags, shared faces, seam wedges) decide where the
   // surviving vertex may go and run whenever a candidate is scored; the link condition and the
   // geometric checks run once, when a candidate reaches the top of the queue.
@@ -125,6 +125,9 @@ class Engine {
   /// The lanes' part of the run (see the comment there), from the first rating of every edge; returns
   /// false (and leaves `first` alone) when the mesh is too small for lanes.
   bool run_lanes(std::vector<HeapEntry>& first);
+  /// One pass of lanes over `slabs` until `stop_at` faces are left; takes the entries queued so far and
+  /// returns those left, the rims' edges rated.
+  std::vector<HeapEntry> lane_pass(Slabs slabs, Index stop_at, std::vector<HeapEntry>& queued);
   /// The queue entries of these edges, rated side by side, in list order.
   std::vector<HeapEntry> rate_all(const std::vector<std::pair<Index, Index>>& edges);
   /// Calls the progress callback, about once a percent, with `alive` faces left.
@@ -154,6 +157,7 @@ class Engine {
   std::vector<std::uint32_t> dirty_;  // bumped when a point's neighbourhood energy changed (wide updates)
   double cos_max_turn_ = 0;
   std::vector<EdgeUse> edges_;  // every edge of the input, from setup() until run() has queued them
+  std::vector<Index> canonical_;  // per input vertex: the first vertex identical to it
   std::vector<Index> region_;  // per point: its slab while lanes run, -1 on a slab's rim; then empty
   tbb::enumerable_thread_specific<std::array<Probe, 2>> probes_;
   // Result bookkeeping.
@@ -190,7 +194,8 @@ void Engine::setup(const Mesh& mesh) {
 
   // Faces on canonical wedges (identical vertices merged, so an unwelded soup is not all seams); a
   // face whose corners are not three distinct points cannot take part and is dropped.
-  const std::vector<Index> canonical = identical_vertex_classes(mesh);
+  canonical_ = identical_vertex_classes(mesh);
+  const std::vector<Index>& canonical = canonical_;
   const auto faces = static_cast<std::size_t>(mesh.num_faces());
   s_.face.reserve(faces), s_.face_point.reserve(faces), s_.face_normal0.reserve(faces), s_.face_dead.reserve(faces);
   {
@@ -203,6 +208,8 @@ void Engine::setup(const Mesh& mesh) {
   }
   std::vector<std::array<Index, 3>> point_faces;
   point_faces.reserve(faces);
+  std::vector<Index> face_id;  // of each entry of point_faces
+  face_id.reserve(faces);
   for (Index f = 0; f < mesh.num_faces(); ++f) {
     const std::array<Index, 3> w{canonical[mesh.triangles(f, 0)], canonical[mesh.triangles(f, 1)],
                                  canonical[mesh.triangles(f, 2)]};
@@ -220,6 +227,7 @@ void Engine::setup(const Mesh& mesh) {
     }
     s_.face_dead.push_back(0);
     point_faces.push_back(p);
+    face_id.push_back(f);
     for (Index q : p) s_.point_faces[q].push_back(f);
   }
   s_.alive_faces = static_cast<Index>(point_faces.size());
@@ -270,7 +278,7 @@ void Engine::setup(const Mesh& mesh) {
       s_.quadric[p0] += bq, s_.quadric[p1] += bq;
     }
   }
-  add_crease_planes();
+  add_crease_planes(face_id);
 }
 
 // Crease planes: the boundary constraint generalised to folded edges. Face planes alone leave a
@@ -279,22 +287,28 @@ void Engine::setup(const Mesh& mesh) {
 // edge adds the plane through it whose normal bisects its faces' normals, weighted by
 // crease_weight * |edge|^2 * (1 - n1.n2) / 2: nothing on flat ground, the full weight on a fin whose
 // sides fold back onto each other (n2 = -n1, where the plane is a boundary plane).
-void Engine::add_crease_planes() {
+void Engine::add_crease_planes(const std::vector<Index>& face_id) {
   // Quadric only: hoppe starts from the quadric's position but measures its own energy, and it kept
   // less Hausdorff with them (horse 10 %: 0.28 % against 0.14 %).
   if (o_.method != SimplifyMethod::Quadric || !(o_.crease_weight > 0)) return;
+  // Each interior edge of two consistently oriented faces, from the face of lower index, in face
+  // order: classify_edges found both faces already (a search per edge was a fifth of the setup).
   const Index faces = static_cast<Index>(s_.face.size());
-  for (Index f = 0; f < faces; ++f) {
-    if (s_.face_dead[f]) continue;
+  std::vector<Index> across(3 * static_cast<std::size_t>(faces), -1);  // per face side: the other face
+  for (const EdgeUse& e : edges_) {
+    if (e.faces != 2 || !e.consistent) continue;
+    const Index f0 = face_id[e.face[0]], f1 = face_id[e.face[1]];
+    const Index f = std::min(f0, f1);
     for (int k = 0; k < 3; ++k) {
       const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
-      find_shared_faces(p0, p1, main_.probe);
-      if (main_.probe.shared.size() != 2) continue;  // border or non-manifold
-      const Index other = main_.probe.shared[0] == f ? main_.probe.shared[1] : main_.probe.shared[0];
-      if (other < f) continue;  // seen from `other` already
-      int j = 0;
-      while (s_.corner_point(other, j) != p0) ++j;
-      if (s_.corner_point(other, (j + 1) % 3) == p1) continue;  // misoriented: `other` also runs p0 -> p1
+      if ((p0 == e.lo && p1 == e.hi) || (p0 == e.hi && p1 == e.lo)) across[3 * std::size_t(f) + k] = std::max(f0, f1);
+    }
+  }
+  for (Index f = 0; f < faces; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const Index other = across[3 * std::size_t(f) + k];
+      if (other < 0) continue;
+      const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
       const Eigen::Vector3d n1 = s_.face_normal0[f].cast<double>(), n2 = s_.face_normal0[other].cast<double>();
       const double fold = 0.5 * (1.0 - n1.dot(n2));
       const Eigen::Vector3d m = (n1 + n2).normalized();
@@ -746,35 +760,46 @@ void Engine::drain(Lane& lane, Done done, std::optional<std::pair<Index, Index>>
 // ever touch the same point, face or list). They go in rounds: each collapses all it has that costs
 // less than a common threshold, which then rises by a quarter, so the slabs coarsen at the pace one
 // queue would set and no slab runs ahead. A round's work depends on the threshold only, never on which
-// lane finished first: the result is the same for any number of threads. When 90 % of the collapses
-// are done, or a lane reaches its share of the target, the one queue takes over for the rest, rims
-// included.
+// lane finished first: the result is the same for any number of threads. Two passes: the first stops
+// at four fifths of the collapses, the second, on slabs cut halfway between the first's cuts (so the
+// first's rims lie inside them), at 95 %. One queue does the rest, the second pass's rims included.
 bool Engine::run_lanes(std::vector<HeapEntry>& first) {
   const Index target = target_;
   const Index alive = s_.alive_faces;
   const Index count = o_.lane_faces > 0 ? std::min<Index>(kMaxLanes, alive / o_.lane_faces) : 0;
   if (count < 2 || o_.record_collapses || cost_->wide_update()) return false;
 
+  // Each pass leaves the one queue after it the balance to restore at its slabs' edges: at least
+  // three times the rims' faces to remove (with less, the rims' detail has to go all at once, wherever
+  // it is: torus at 1 % in 8 slabs, RMS +80 %).
   Slabs slabs = cut_into_slabs(s_, count);
-  // The last part, one queue for the whole mesh, has the rims to do, and the balance to restore at
-  // the slabs' edges: a fifth of the collapses, and at least three times the rims' faces to remove
-  // (with less, the rims' detail has to go all at once, wherever it is: torus at 1 % in 8 slabs,
-  // RMS +80 %).
-  const Index stop_at = target + std::max((alive - target) / 5, 3 * slabs.rim_faces);
-  if (stop_at >= alive) return false;
+  const Index first_stop = target + std::max((alive - target) / 5, 3 * slabs.rim_faces);
+  if (first_stop >= alive) return false;
+  std::vector<HeapEntry> entries = lane_pass(std::move(slabs), first_stop, first);
+  Slabs shifted = cut_into_slabs(s_, count, true);
+  const Index second_stop = target + std::max((alive - target) / 20, 3 * shifted.rim_faces);
+  if (second_stop < s_.alive_faces) entries = lane_pass(std::move(shifted), second_stop, entries);
+  main_.queue.load(std::move(entries));
+  lanes_used_ = static_cast<int>(count);
+  return true;
+}
+
+std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector<HeapEntry>& queued) {
+  const Index alive = s_.alive_faces;
   region_ = std::move(slabs.region);
-  std::vector<Lane> lanes(static_cast<std::size_t>(count));
-  for (Index i = 0; i < count; ++i) {
-    lanes[i].region = i;
+  std::vector<Lane> lanes(slabs.faces.size());
+  for (std::size_t i = 0; i < lanes.size(); ++i) {
+    lanes[i].region = static_cast<Index>(i);
     // Never below its share of the target (rounded up), so the lanes together stop above it.
-    lanes[i].floor = static_cast<Index>((std::int64_t(target) * slabs.faces[i] + alive - 1) / alive);
+    lanes[i].floor = static_cast<Index>((std::int64_t(target_) * slabs.faces[i] + alive - 1) / alive);
   }
   {
+    // Entries with an end on a rim are dropped: the rims' edges are rated afresh after the pass.
     std::vector<std::vector<HeapEntry>> split(lanes.size());
-    for (const HeapEntry& e : first)
-      if (region_[e.u] >= 0 && region_[e.u] == region_[e.v]) split[region_[e.u]].push_back(e);
-    first = {};
-    for (std::size_t i = 0; i < lanes.size(); ++i) lanes[i].queue.load(std::move(split[i]));
+    for (const HeapEntry& e : queued)
+      if (region_[e.u] >= 0 && region_[e.u] == region_[e.v] && !stale(e)) split[region_[e.u]].push_back(e);
+    queued = {};
+    tbb::parallel_for(std::size_t(0), lanes.size(), [&](std::size_t i) { lanes[i].queue.load(std::move(split[i])); });
   }
   auto lane_alive = [&](const Lane& lane) { return slabs.faces[lane.region] - lane.removed_faces; };
   double threshold = INFINITY;
@@ -808,8 +833,8 @@ bool Engine::run_lanes(std::vector<HeapEntry>& first) {
       auto& list = s_.point_faces[p];
       list.erase(std::remove_if(list.begin(), list.end(), [&](Index f) { return s_.face_dead[f] != 0; }), list.end());
     }
-  // One queue for the rest: what the lanes left (still valid: scored as one queue would have), and
-  // the rims' edges, which no lane queued, rated now.
+  // What the lanes left (still valid: scored as one queue would have), and the rims' edges, which no
+  // lane queued, rated now.
   std::vector<std::pair<Index, Index>> edges;
   std::vector<Index>& ring = main_.ring;
   for (Index p = 0; p < static_cast<Index>(region_.size()); ++p) {
@@ -823,9 +848,7 @@ bool Engine::run_lanes(std::vector<HeapEntry>& first) {
   for (Lane& lane : lanes)
     for (const HeapEntry& e : lane.queue.take())
       if (!stale(e)) entries.push_back(e);
-  main_.queue.load(std::move(entries));
-  lanes_used_ = static_cast<int>(count);
-  return true;
+  return entries;
 }
 
 std::vector<HeapEntry> Engine::rate_all(const std::vector<std::pair<Index, Index>>& edges) {
@@ -942,7 +965,7 @@ SimplifyResult Engine::run(Index target) {
   result.records = std::move(records_);
   if (o_.record_collapses) {
     result.vertex_point = s_.point_of;
-    result.vertex_canonical = identical_vertex_classes(in);
+    result.vertex_canonical = std::move(canonical_);
   }
   if (o_.progress) o_.progress(1.0);
   return result;

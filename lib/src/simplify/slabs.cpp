@@ -4,7 +4,7 @@
 
 namespace lodkit::detail {
 
-Slabs cut_into_slabs(const EngineState& s, Index count) {
+Slabs cut_into_slabs(const EngineState& s, Index count, bool shifted) {
   Eigen::AlignedBox3d box;
   for (const auto& p : s.position) box.extend(p);
   int axis = 0;
@@ -18,17 +18,20 @@ Slabs cut_into_slabs(const EngineState& s, Index count) {
     for (int k = 0; k < 3; ++k) centre[f] += s.position[s.corner_point(f, k)][axis];
     sorted.push_back(centre[f]);
   }
-  // The cuts: the face centres at 1/count, 2/count, ... of the way, each selection on what is left.
+  // The cuts: the face centres at 1/count, 2/count, ... of the way (shifted: 1/2count, 3/2count, ...),
+  // each selection on what is left.
   std::vector<double> cut;
-  for (auto from = sorted.begin(); static_cast<Index>(cut.size()) + 1 < count;) {
-    const auto at = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * (cut.size() + 1) / std::size_t(count));
+  const std::size_t cuts = shifted ? std::size_t(count) : std::size_t(count) - 1;
+  for (auto from = sorted.begin(); cut.size() < cuts && !sorted.empty();) {
+    const std::size_t twice = shifted ? 2 * cut.size() + 1 : 2 * cut.size() + 2;  // in halves of a slab
+    const auto at = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * twice / (2 * std::size_t(count)));
     std::nth_element(from, at, sorted.end());
     cut.push_back(*at);
     from = at;
   }
 
   Slabs out;
-  out.faces.assign(static_cast<std::size_t>(count), 0);
+  out.faces.assign(cut.size() + 1, 0);
   out.region.assign(s.position.size(), -2);
   for (Index f = 0; f < faces; ++f) {
     if (s.face_dead[f]) continue;

@@ -14,8 +14,9 @@ struct Slabs {
   Index rim_faces = 0;       ///< alive faces with a corner on a rim
 };
 
-/// `count` slabs of equal face counts across the longest side of the bounding box, each face in the
-/// slab of its centroid.
-Slabs cut_into_slabs(const EngineState& s, Index count);
+/// Slabs of equal face counts across the longest side of the bounding box, each face in the slab of
+/// its centroid: `count` of them, or with `shifted`, cut halfway between those cuts instead (count + 1
+/// slabs, the two end ones half as thick), so the first cut's rims lie inside the second's slabs.
+Slabs cut_into_slabs(const EngineState& s, Index count, bool shifted = false);
 
 }  // namespace lodkit::detail
