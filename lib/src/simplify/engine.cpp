@@ -794,10 +794,11 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
     lanes[i].floor = static_cast<Index>((std::int64_t(target_) * slabs.faces[i] + alive - 1) / alive);
   }
   {
-    // Entries with an end on a rim are dropped: the rims' edges are rated afresh after the pass.
+    // Entries with an end on a rim are dropped: the rims' edges are rated afresh after the pass. (No
+    // entry is stale: nothing collapsed since they were rated or filtered.)
     std::vector<std::vector<HeapEntry>> split(lanes.size());
     for (const HeapEntry& e : queued)
-      if (region_[e.u] >= 0 && region_[e.u] == region_[e.v] && !stale(e)) split[region_[e.u]].push_back(e);
+      if (region_[e.u] >= 0 && region_[e.u] == region_[e.v]) split[region_[e.u]].push_back(e);
     queued = {};
     tbb::parallel_for(std::size_t(0), lanes.size(), [&](std::size_t i) { lanes[i].queue.load(std::move(split[i])); });
   }
@@ -827,18 +828,14 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
   s_.alive_faces = total;
   for (const Lane& lane : lanes) collapses_ += lane.collapses, max_error_ = std::max(max_error_, lane.max_error);
 
-  // The rims' face lists kept the faces their lanes removed.
-  for (std::size_t p = 0; p < region_.size(); ++p)
-    if (region_[p] == -1) {
-      auto& list = s_.point_faces[p];
-      list.erase(std::remove_if(list.begin(), list.end(), [&](Index f) { return s_.face_dead[f] != 0; }), list.end());
-    }
   // What the lanes left (still valid: scored as one queue would have), and the rims' edges, which no
-  // lane queued, rated now.
+  // lane queued, rated now. The rims' face lists kept the faces their lanes removed: pruned first.
   std::vector<std::pair<Index, Index>> edges;
   std::vector<Index>& ring = main_.ring;
   for (Index p = 0; p < static_cast<Index>(region_.size()); ++p) {
     if (region_[p] != -1) continue;
+    auto& list = s_.point_faces[p];
+    list.erase(std::remove_if(list.begin(), list.end(), [&](Index f) { return s_.face_dead[f] != 0; }), list.end());
     neighbours(p, ring);
     for (Index q : ring)
       if (region_[q] != -1 || q > p) edges.push_back({p, q});

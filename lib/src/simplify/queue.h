@@ -92,10 +92,10 @@ class BatchQueue {
 
   /// Moves every item out, in no particular order, and leaves the queue empty.
   std::vector<T> take() {
-    std::vector<T> out(run_.begin() + static_cast<std::ptrdiff_t>(next_), run_.end());
+    std::vector<T> out = std::exchange(run_, {});
+    out.erase(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(next_));
     const std::vector<T> rest = heap_.take();
     out.insert(out.end(), rest.begin(), rest.end());
-    run_.clear();
     next_ = 0;
     return out;
   }
