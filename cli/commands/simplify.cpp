@@ -29,6 +29,7 @@ struct SimplifyCliOptions {
   bool accumulate_error = false;
   std::uint64_t seed = 1;
   double hoppe_samples = SimplifyOptions{}.hoppe_points_per_face;
+  Index hoppe_min_points = SimplifyOptions{}.hoppe_min_points;
   Index lane_faces = SimplifyOptions{}.lane_faces;
 };
 
@@ -105,6 +106,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   }
   s.seed = o.seed;
   s.hoppe_points_per_face = o.hoppe_samples;
+  s.hoppe_min_points = o.hoppe_min_points;
   s.lane_faces = o.lane_faces;
   const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
   if (show_progress)
@@ -186,8 +188,11 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_flag("--accumulate-error", opt->accumulate_error, "schroeder: add each removal's error to its neighbours");
   sub->add_option("--seed", opt->seed, "Seed for hoppe's surface samples")->capture_default_str();
   sub->add_option("--hoppe-samples", opt->hoppe_samples,
-                  "hoppe: random surface points per face besides the vertices (raise for CAD meshes of thin triangles)")
+                  "hoppe: random surface points per face besides the vertices, at least")
       ->check(CLI::Range(0.0, 1000.0))->capture_default_str();
+  sub->add_option("--hoppe-min-points", opt->hoppe_min_points,
+                  "hoppe: the fewest sample points in all; smaller meshes get more per face (0 = no floor)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_option("--lane-faces", opt->lane_faces,
                   "Large meshes are first simplified in slabs of about this many faces side by side (quadric, "
                   "edge-length; 0 = one queue throughout)")
@@ -201,7 +206,7 @@ Examples:
   lodkit simplify part.stl -o part_lo.stl --max-error 0.1% --lock-boundary
   lodkit simplify spot.obj -o spot_small.obj --ratio 0.1 --attribute-weights 0,1,0
   lodkit simplify part.obj -o part_lo.obj --method schroeder --max-error 0.05% --feature-angle 30
-  lodkit simplify fandisk.obj -o fandisk_lo.ply --ratio 0.1 --method hoppe --hoppe-samples 5
+  lodkit simplify fandisk.obj -o fandisk_lo.ply --ratio 0.1 --method hoppe
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};
 }

@@ -73,10 +73,14 @@ struct SimplifyOptions {
   /// wedges then also take the attribute values that minimise the error.
   AttributeWeights attribute_weights{};
 
-  /// Hoppe: random points sampled per input face (besides the vertices), and the seed. Raise it for CAD
-  /// meshes of long thin triangles: with few points per face the paper's spring schedule keeps the
-  /// springs strong, and they pull vertices off creases (docs/benchmarks.md, "Session 10").
+  /// Hoppe: random points sampled per input face (besides the vertices), at least; and the seed.
   double hoppe_points_per_face = 1.0;
+  /// Hoppe: the fewest sample points in all (vertices plus random points); smaller meshes get more random
+  /// points per face to reach it. With few points per face the paper's spring schedule keeps the springs
+  /// strong, and on CAD meshes of long thin triangles they pull vertices off creases (fandisk's RMS at
+  /// 10 %: 0.0158 % with 1 point per face, 0.0028 % with this floor; docs/benchmarks.md, "Session 13").
+  /// Meshes of about 65k faces and more (the bunny) are not affected. 0 = no floor.
+  Index hoppe_min_points = 100000;
   std::uint64_t seed = 1;
 
   /// Meshes of at least twice this many faces are first simplified in slabs of about this many faces,

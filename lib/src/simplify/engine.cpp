@@ -987,6 +987,8 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   if (!(options.hoppe_points_per_face >= 0 && options.hoppe_points_per_face <= 1000))
     throw Error(fmt::format("simplify: hoppe's random points per face must be between 0 and 1000, got {}",
                             options.hoppe_points_per_face));
+  if (options.hoppe_min_points < 0)
+    throw Error(fmt::format("simplify: hoppe's minimum sample points must not be negative, got {}", options.hoppe_min_points));
   Index target = 0;
   if (!options.target_faces && !options.target_ratio && !options.max_error) target = mesh.num_faces() / 2;
   if (options.target_faces) target = std::max(target, *options.target_faces);

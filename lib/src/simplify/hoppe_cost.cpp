@@ -345,8 +345,10 @@ class HoppeScorer {
 class HoppeCost final : public CostModel {
  public:
   HoppeCost(const SimplifyOptions& o, const EngineState& s) {
-    // Points: every vertex position, plus `points_per_face` random points per face (seeded).
+    // Points: every vertex position, plus random points on each face (seeded): `points_per_face`, or
+    // more where that falls short of `min_points` in all.
     const Mesh& m = *s.input;
+    const double per_face = random_points_per_face(o, s);
     std::mt19937_64 rng(o.seed);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     face_points_.resize(s.face.size());
@@ -358,7 +360,7 @@ class HoppeCost final : public CostModel {
         const Index p = s.corner_point(Index(f), k);
         if (!placed[p]) placed[p] = 1, add_point(s.position[p], Index(f));
       }
-      carry += o.hoppe_points_per_face;
+      carry += per_face;
       for (; carry >= 1.0; carry -= 1.0) {
         double a = unit(rng), b = unit(rng);
         if (a + b > 1) a = 1 - a, b = 1 - b;
@@ -367,6 +369,15 @@ class HoppeCost final : public CostModel {
         add_point(p0 + a * (p1 - p0) + b * (p2 - p0), Index(f));
       }
     }
+  }
+
+  static double random_points_per_face(const SimplifyOptions& o, const EngineState& s) {
+    std::size_t points = 0;
+    for (std::size_t p = 0; p < s.position.size(); ++p) points += !s.point_faces[p].empty();
+    const std::size_t faces = static_cast<std::size_t>(s.alive_faces);
+    const std::size_t wanted = static_cast<std::size_t>(std::max<Index>(o.hoppe_min_points, 0));
+    if (faces == 0 || points >= wanted) return o.hoppe_points_per_face;
+    return std::max(o.hoppe_points_per_face, std::min(1000.0, double(wanted - points) / double(faces)));
   }
 
   bool wide_update() const override { return true; }
