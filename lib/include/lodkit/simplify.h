@@ -79,7 +79,7 @@ struct SimplifyOptions {
   /// points per face to reach it. With few points per face the paper's spring schedule keeps the springs
   /// strong, and on CAD meshes of long thin triangles they pull vertices off creases (fandisk's RMS at
   /// 10 %: 0.0158 % with 1 point per face, 0.0028 % with this floor; docs/benchmarks.md, "Session 13").
-  /// Meshes of about 65k faces and more (the bunny) are not affected. 0 = no floor.
+  /// Meshes of about 67k faces and more (the bunny) are not affected. 0 = no floor.
   Index hoppe_min_points = 100000;
   std::uint64_t seed = 1;
 
