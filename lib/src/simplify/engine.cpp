@@ -234,10 +234,21 @@ void Engine::setup(const Mesh& mesh) {
 
   // Boundaries and non-manifold parts.
   edges_ = classify_edges(point_faces);
+  std::vector<char> border_side(3 * faces, 0);  // per face side: on the boundary
   for (const EdgeUse& e : edges_) {
-    if (e.faces == 1) s_.flags[e.lo] |= kBorder, s_.flags[e.hi] |= kBorder;
+    if (e.faces == 1) {
+      s_.flags[e.lo] |= kBorder, s_.flags[e.hi] |= kBorder;
+      const Index f = face_id[e.face[0]];
+      for (int k = 0; k < 3; ++k) {
+        const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
+        if (std::min(p0, p1) != e.lo || std::max(p0, p1) != e.hi) continue;
+        border_side[3 * std::size_t(f) + k] = 1;
+        s_.input_boundary.push_back({p0, p1});
+      }
+    }
     if (e.faces > 2 || !e.consistent) s_.flags[e.lo] |= kLocked, s_.flags[e.hi] |= kLocked;
   }
+  std::sort(s_.input_boundary.begin(), s_.input_boundary.end());
   const std::vector<char> fans = non_manifold_fans(points, point_faces);
   for (Index p = 0; p < points; ++p) {
     if (fans[p]) s_.flags[p] |= kLocked;
@@ -267,10 +278,8 @@ void Engine::setup(const Mesh& mesh) {
     const Quadric q = Quadric::plane(n, -n.dot(s_.position[a]), 0.5 * len);
     s_.quadric[a] += q, s_.quadric[b] += q, s_.quadric[c] += q;
     for (int k = 0; k < 3; ++k) {
+      if (!border_side[3 * std::size_t(f) + k]) continue;
       const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
-      if (!(s_.has(p0, kBorder) && s_.has(p1, kBorder))) continue;
-      find_shared_faces(p0, p1, main_.probe);
-      if (main_.probe.shared.size() != 1) continue;  // not a boundary edge
       const Eigen::Vector3d edge = s_.position[p1] - s_.position[p0];
       const Eigen::Vector3d m = edge.cross(n).normalized();
       if (!m.allFinite()) continue;
@@ -383,16 +392,7 @@ void Engine::output_attributes(Index w, double* out) const {
                                       : double(a.colours(w, d));
 }
 
-void Engine::neighbours(Index p, std::vector<Index>& out) {
-  out.clear();
-  for (Index f : s_.faces_of(p))
-    for (int k = 0; k < 3; ++k) {
-      const Index q = s_.corner_point(f, k);
-      if (q != p) out.push_back(q);
-    }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-}
+void Engine::neighbours(Index p, std::vector<Index>& out) { s_.ring(p, out); }
 
 Index Engine::wedge_at(Index f, Index p) const {
   for (int k = 0; k < 3; ++k)

@@ -38,6 +38,8 @@ struct EngineState {
   std::vector<std::array<Index, 3>> face_point; ///< points of each face (point_of[face]: one load, not two)
   std::vector<std::uint8_t> face_dead;
   std::vector<Eigen::Vector3f> face_normal0;    ///< each face's unit normal in the input
+  /// The input's boundary edges (one face each), as that face runs them, sorted.
+  std::vector<std::pair<Index, Index>> input_boundary;
   Index alive_faces = 0;
 
   /// Per-wedge attribute quadrics and values (scaled), when attribute weights are on.
@@ -48,6 +50,15 @@ struct EngineState {
   bool has(Index p, PointFlag flag) const { return flags[p] & flag; }
   /// Alive faces of point p (a collapse prunes the dead ones from the lists it touches).
   const std::vector<Index>& faces_of(Index p) const { return point_faces[p]; }
+  /// The points around p (each once with `repeats` false, else once per face that has it), sorted.
+  void ring(Index p, std::vector<Index>& out, bool repeats = false) const {
+    out.clear();
+    for (Index f : faces_of(p))
+      for (int k = 0; k < 3; ++k)
+        if (corner_point(f, k) != p) out.push_back(corner_point(f, k));
+    std::sort(out.begin(), out.end());
+    if (!repeats) out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
 };
 
 /// What the structural checks of one candidate u -> v found. Each direction and each thread has its

@@ -45,13 +45,7 @@ struct BoundaryCurves {
 
 /// The neighbours x of p with (p, x) a boundary edge: exactly one of p's faces has both.
 void boundary_neighbours(const EngineState& s, Index p, std::vector<Index>& out) {
-  out.clear();
-  for (Index f : s.faces_of(p))
-    for (int k = 0; k < 3; ++k) {
-      const Index q = s.corner_point(f, k);
-      if (q != p) out.push_back(q);
-    }
-  std::sort(out.begin(), out.end());
+  s.ring(p, out, true);
   std::size_t n = 0;
   for (std::size_t i = 0; i < out.size();) {
     std::size_t j = i;
@@ -466,21 +460,7 @@ class HoppeCost final : public CostModel {
   // Two points per boundary edge: where it starts (in its face's order, so each boundary vertex once)
   // and its midpoint.
   void sample_boundary(const EngineState& s) {
-    std::unordered_map<std::uint64_t, std::pair<int, std::pair<Index, Index>>> uses;
-    for (std::size_t f = 0; f < s.face.size(); ++f) {
-      if (s.face_dead[f]) continue;
-      for (int k = 0; k < 3; ++k) {
-        const Index a = s.corner_point(Index(f), k), b = s.corner_point(Index(f), (k + 1) % 3);
-        if (!s.has(a, kBorder) || !s.has(b, kBorder)) continue;
-        auto& use = uses[BoundaryCurves::edge_key(a, b)];
-        if (use.first++ == 0) use.second = {a, b};
-      }
-    }
-    std::vector<std::pair<Index, Index>> edges;  // in a fixed order, whatever the hash's
-    for (const auto& [key, use] : uses)
-      if (use.first == 1) edges.push_back(use.second);
-    std::sort(edges.begin(), edges.end());
-    for (const auto& [a, b] : edges) {
+    for (const auto& [a, b] : s.input_boundary) {
       auto& list = curves_.edge_points[BoundaryCurves::edge_key(a, b)];
       for (const Eigen::Vector3d& x : {s.position[a], Eigen::Vector3d(0.5 * (s.position[a] + s.position[b]))}) {
         list.push_back(static_cast<Index>(curves_.point.size()));
