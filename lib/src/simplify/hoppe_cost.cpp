@@ -28,6 +28,13 @@
 namespace lodkit::detail {
 namespace {
 
+/// A point sampled on the input's surface, kept with the current face it belongs to (inline, not by
+/// index: a candidate reads every point of a dozen faces, and scattered points cost a cache miss each).
+struct Sample {
+  Eigen::Vector3d x;
+  double dist2 = 0;  ///< squared distance to its face
+};
+
 /// The points sampled on the input's boundary, each belonging to one boundary edge of the current mesh.
 struct BoundaryCurves {
   std::vector<Eigen::Vector3d> point;
@@ -71,7 +78,7 @@ class HoppeScorer {
   // to it (outward normals).
   struct Tri {
     Eigen::Vector3d c[3], normal, edge_normal[3];
-    double offset, edge_offset[3], area2;
+    double offset, edge_offset[3], area2, length;  ///< length: sqrt(area2), twice the area
     int moving;
   };
   struct Nearest {
@@ -80,9 +87,8 @@ class HoppeScorer {
   };
 
  public:
-  HoppeScorer(const std::vector<Eigen::Vector3d>& point, const std::vector<double>& dist2,
-              const std::vector<std::vector<Index>>& face_points, const BoundaryCurves& curves)
-      : point_(point), dist2_(dist2), face_points_(face_points), curves_(curves) {}
+  HoppeScorer(const std::vector<std::vector<Sample>>& face_samples, const BoundaryCurves& curves)
+      : face_samples_(face_samples), curves_(curves) {}
 
   bool score(const EngineState& s, Index u, Index v, Freedom freedom, bool border_edge, Candidate& out) {
     gather(s, u, v);
@@ -90,7 +96,7 @@ class HoppeScorer {
     // Spring energy before: the edges at u and at v (the rest of the neighbourhood does not change).
     const double kappa = spring_constant();
     double before = 0;
-    for (std::size_t j = 0; j < points_.size(); ++j) before += weight_[j] * dist2_[points_[j]];
+    for (std::size_t j = 0; j < points_.size(); ++j) before += weight_[j] * dist2_[j];
     for (Index c : curve_points_) before += curves_.dist2[c];
     for (Index w : ring_u_) before += kappa * (s.position[u] - s.position[w]).squaredNorm();
     for (Index w : ring_v_)
@@ -116,7 +122,7 @@ class HoppeScorer {
         tri.moving = t[0] < 0 ? 0 : t[1] < 0 ? 1 : 2;
         const Eigen::Vector3d n = (tri.c[1] - tri.c[0]).cross(tri.c[2] - tri.c[0]);
         tri.area2 = n.squaredNorm();
-        const double len = std::sqrt(tri.area2);
+        const double len = tri.length = std::sqrt(tri.area2);
         tri.normal = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
         tri.offset = tri.normal.dot(tri.c[0]);
         for (int k = 0; k < 3; ++k) {
@@ -136,8 +142,8 @@ class HoppeScorer {
         worst = std::max(worst, n.d2);
         if (solve) {
           sum_b2 += weight * n.b * n.b;
-          rhs += weight * n.b * (point_[points_[j]] - n.fixed);
-          projections_.push_back({point_[points_[j]], weight, n.b, n.fixed});
+          rhs += weight * n.b * (points_[j] - n.fixed);
+          projections_.push_back({points_[j], weight, n.b, n.fixed});
         }
       }
       for (Index c : curve_points_) {
@@ -196,66 +202,43 @@ class HoppeScorer {
 
   // The nearest point to x on the new star (merged vertex at p), into nearest_ for every point. The
   // triangle a point's face becomes (its `home`) is nearly always the nearest, so it goes first and its
-  // distance rules out nearly every other one. A point of a vanishing face has no home: the triangle
-  // with the lowest bound goes first, and the bounds computed to find it are the ones the loop checks.
+  // distance rules out nearly every other one through a cheap lower bound, computed for all triangles
+  // at once. A point of a vanishing face has no home: the triangle with the lowest bound goes first.
   void project_all(const Eigen::Vector3d& p, bool solve) {
+    load_planes();
+    const std::size_t m = tri_.size();
     nearest_.resize(points_.size());
-    for (std::size_t j = 0; j < points_.size();) {
-      const int home = home_[j];
-      std::size_t end = j + 1;
-      while (end < points_.size() && home_[end] == home) ++end;
-      if (home < 0) {
-        others_.resize(tri_.size());
-        for (std::size_t k = 0; k < tri_.size(); ++k) others_[k] = k;
-        load_planes();
-        for (; j < end; ++j) nearest_[j] = nearest_homeless(point_[points_[j]], p, solve);
-        continue;
+    for (std::size_t j = 0; j < points_.size(); ++j) {
+      const Eigen::Vector3d& x = points_[j];
+      lower_bounds2(planes_.data(), m, x, bounds_.data());
+      // Home first (or the lowest bound when there is none), then the rest in index order, the first
+      // one taking the first's place.
+      std::size_t first = 0;
+      if (home_[j] >= 0) {
+        first = std::size_t(home_[j]);
+      } else {
+        for (std::size_t k = 1; k < m; ++k)
+          if (bounds_[k] < bounds_[first]) first = k;
       }
-      // The points of one face, all near their home triangle: the other triangles that can be nearer
-      // than home for any of them are found once for the group (on fandisk, where a star averages 47
-      // triangles, testing each point against each triangle was 80 % of the time). A triangle t is out if
-      // B(c) - r >= max home distance, where B (the larger of the distances to t's plane and outside
-      // its edge planes) is a 1-Lipschitz lower bound of the distance to t, c the group's centre and
-      // r its radius. Which triangles are tried, and in which order, is otherwise unchanged.
-      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-      for (std::size_t i = j; i < end; ++i) centre += point_[points_[i]];
-      centre /= double(end - j);
-      double radius2 = 0, reach2 = 0;
-      for (std::size_t i = j; i < end; ++i) {
-        const Eigen::Vector3d& x = point_[points_[i]];
-        radius2 = std::max(radius2, (x - centre).squaredNorm());
-        nearest_[i] = on_triangle(x, tri_[std::size_t(home)], p, solve);
-        reach2 = std::max(reach2, nearest_[i].d2);
-      }
-      const double reach = (std::sqrt(reach2) + std::sqrt(radius2)) * (1 + 1e-9);
-      others_.clear();
-      for (std::size_t n = 1; n < tri_.size(); ++n) {
-        const std::size_t k = n == std::size_t(home) ? 0 : n;
-        if (lipschitz_bound(tri_[k], centre) < reach) others_.push_back(k);
-      }
-      load_planes();
-      const std::size_t m = others_.size();
-      for (; j < end; ++j) {
-        const Eigen::Vector3d& x = point_[points_[j]];
-        Nearest& out = nearest_[j];
-        lower_bounds2(planes_.data(), m, x, bounds_.data());
-        for (std::size_t i = 0; i < m; ++i) {
-          if (bounds_[i] >= out.d2) continue;
-          const Nearest n = on_triangle(x, tri_[others_[i]], p, solve);
-          if (n.d2 < out.d2) out = n;
-        }
+      Nearest& out = nearest_[j];
+      out = on_triangle(x, tri_[first], p, solve);
+      for (std::size_t n = 1; n < m; ++n) {
+        const std::size_t k = n == first ? 0 : n;
+        if (bounds_[k] >= out.d2) continue;
+        const Nearest c = on_triangle(x, tri_[k], p, solve);
+        if (c.d2 < out.d2) out = c;
       }
     }
   }
 
-  // The planes of the triangles in others_, side by side (see lower_bounds2), so that one point's
+  // The planes of every triangle of the star, side by side (see lower_bounds2), so that one point's
   // bounds against all of them vectorise.
   void load_planes() {
-    const std::size_t m = others_.size();
+    const std::size_t m = tri_.size();
     planes_.resize(16 * m);
     bounds_.resize(m);
     for (std::size_t i = 0; i < m; ++i) {
-      const Tri& t = tri_[others_[i]];
+      const Tri& t = tri_[i];
       for (int c = 0; c < 3; ++c) {
         planes_[c * m + i] = t.normal[c];
         for (int e = 0; e < 3; ++e) planes_[(4 + 4 * e + c) * m + i] = t.edge_normal[e][c];
@@ -286,29 +269,6 @@ class HoppeScorer {
     }
   }
 
-  // max(|distance to t's plane|, distance outside each of its edge planes): no more than the distance
-  // to t, and changing by no more than x does.
-  static double lipschitz_bound(const Tri& t, const Eigen::Vector3d& x) {
-    return std::max({std::abs(t.normal.dot(x) - t.offset), t.edge_normal[0].dot(x) - t.edge_offset[0],
-                     t.edge_normal[1].dot(x) - t.edge_offset[1], t.edge_normal[2].dot(x) - t.edge_offset[2]});
-  }
-
-  // A point of a vanishing face, with the planes of every star triangle loaded (load_planes).
-  Nearest nearest_homeless(const Eigen::Vector3d& x, const Eigen::Vector3d& p, bool solve) {
-    lower_bounds2(planes_.data(), tri_.size(), x, bounds_.data());
-    std::size_t first = 0;
-    for (std::size_t k = 1; k < tri_.size(); ++k)
-      if (bounds_[k] < bounds_[first]) first = k;
-    Nearest out{INFINITY, 0.0, Eigen::Vector3d::Zero()};
-    for (std::size_t n = 0; n < tri_.size(); ++n) {
-      const std::size_t k = n == 0 ? first : n == first ? 0 : n;
-      if (n > 0 && bounds_[k] >= out.d2) continue;
-      const Nearest c = on_triangle(x, tri_[k], p, solve);
-      if (c.d2 < out.d2) out = c;
-    }
-    return out;
-  }
-
   // The nearest point to x on triangle t; with `solve`, also the barycentric weight of the moving
   // corner and the fixed remainder of the point.
   static Nearest on_triangle(const Eigen::Vector3d& x, const Tri& t, const Eigen::Vector3d& p, bool solve) {
@@ -317,7 +277,7 @@ class HoppeScorer {
     if (solve) {
       const int m = t.moving;
       const Eigen::Vector3d e1 = t.c[(m + 1) % 3] - q, e2 = t.c[(m + 2) % 3] - q;
-      out.b = t.area2 > 0 ? std::clamp(e1.cross(e2).dot(t.normal) / std::sqrt(t.area2), 0.0, 1.0) : 0.0;
+      out.b = t.area2 > 0 ? std::clamp(e1.cross(e2).dot(t.normal) / t.length, 0.0, 1.0) : 0.0;
       out.fixed = q - out.b * p;
     }
     return out;
@@ -328,6 +288,7 @@ class HoppeScorer {
   // and the rings of u, v and the merged vertex.
   void gather(const EngineState& s, Index u, Index v) {
     points_.clear();
+    dist2_.clear();
     weight_.clear();
     home_.clear();
     point_count_ = 0;
@@ -342,12 +303,13 @@ class HoppeScorer {
         ++faces_;
         // At most kPointsPerFace points of each face take part, each standing for its share: the
         // estimate of Delta E stays unbiased while coarse levels (100+ points per face) stay cheap.
-        const auto& fp = face_points_[f];
+        const auto& fp = face_samples_[f];
         point_count_ += fp.size();
         const std::size_t stride = (fp.size() + kPointsPerFace - 1) / kPointsPerFace;
         const int home = has_u && has_v ? -1 : static_cast<int>(star_.size());  // its triangle in the new star
         for (std::size_t i = 0; i < fp.size(); i += std::max<std::size_t>(stride, 1)) {
-          points_.push_back(fp[i]);
+          points_.push_back(fp[i].x);
+          dist2_.push_back(fp[i].dist2);
           weight_.push_back(double(stride ? stride : 1));
           home_.push_back(home);
         }
@@ -402,22 +364,21 @@ class HoppeScorer {
     return 1e-8;
   }
 
-  const std::vector<Eigen::Vector3d>& point_;
-  const std::vector<double>& dist2_;  ///< per point: squared distance to its face
-  const std::vector<std::vector<Index>>& face_points_;
+  const std::vector<std::vector<Sample>>& face_samples_;
   const BoundaryCurves& curves_;
   // Scratch for one candidate.
   std::vector<Index> curve_points_, curve_ends_, scratch_;
   static constexpr std::size_t kPointsPerFace = 16;
-  std::vector<Index> points_, ring_u_, ring_v_, ring_;
+  std::vector<Eigen::Vector3d> points_;  ///< the points of the neighbourhood, side by side
+  std::vector<double> dist2_;            ///< per point of points_: its squared distance before
+  std::vector<Index> ring_u_, ring_v_, ring_;
   std::vector<double> weight_;
   std::vector<int> home_;  ///< per point of points_: the star triangle its face becomes, or -1
   std::size_t point_count_ = 0;
   std::vector<std::array<Index, 3>> star_;
   std::vector<Tri> tri_;
   std::vector<Nearest> nearest_;  ///< per point of points_: its projection onto the new star
-  std::vector<std::size_t> others_;  ///< the triangles a group's points try besides home (all, for no home)
-  std::vector<double> planes_, bounds_;  ///< others_' planes (see lower_bounds2) and one point's bounds
+  std::vector<double> planes_, bounds_;  ///< the star's planes (see lower_bounds2) and one point's bounds
   struct Projection {
     Eigen::Vector3d x;  // the sample point
     double weight, b;
@@ -436,7 +397,7 @@ class HoppeCost final : public CostModel {
     const double per_face = random_points_per_face(o, s);
     std::mt19937_64 rng(o.seed);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
-    face_points_.resize(s.face.size());
+    face_samples_.resize(s.face.size());
     std::vector<char> placed(s.position.size(), 0);
     double carry = 0;
     for (std::size_t f = 0; f < s.face.size(); ++f) {
@@ -488,26 +449,27 @@ class HoppeCost final : public CostModel {
 
   void collapsed(EngineState& s, Index u, Index v, const std::vector<Index>& removed_faces) override {
     // Re-assign the points of the old neighbourhood to the faces now around v.
-    std::vector<Index> moving;
-    for (Index f : removed_faces) moving.insert(moving.end(), face_points_[f].begin(), face_points_[f].end());
-    for (Index f : removed_faces) face_points_[f].clear();
+    std::vector<Sample>& moving = moving_;
+    moving.clear();
+    for (Index f : removed_faces) moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
+    for (Index f : removed_faces) face_samples_[f].clear();
     const std::vector<Index>& around = s.faces_of(v);
     for (Index f : around) {
-      moving.insert(moving.end(), face_points_[f].begin(), face_points_[f].end());
-      face_points_[f].clear();
+      moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
+      face_samples_[f].clear();
     }
     (void)u;
-    for (Index i : moving) {
+    for (Sample& sample : moving) {
       double best = INFINITY;
       Index best_face = -1;
       for (Index f : around) {
-        const Eigen::Vector3d q = closest_point_on_triangle(point_[i], s.position[s.corner_point(f, 0)],
+        const Eigen::Vector3d q = closest_point_on_triangle(sample.x, s.position[s.corner_point(f, 0)],
                                                             s.position[s.corner_point(f, 1)], s.position[s.corner_point(f, 2)]);
-        const double d = (q - point_[i]).squaredNorm();
+        const double d = (q - sample.x).squaredNorm();
         if (d < best) best = d, best_face = f;
       }
-      dist2_[i] = best;
-      face_points_[best_face].push_back(i);
+      sample.dist2 = best;
+      face_samples_[best_face].push_back(sample);
     }
     if (removed_faces.size() == 1 && s.has(v, kBorder) && !curves_.point.empty()) reassign_boundary(s, u, v);
   }
@@ -538,17 +500,14 @@ class HoppeCost final : public CostModel {
 
  private:
   void add_point(const Eigen::Vector3d& p, Index face) {
-    face_points_[face].push_back(static_cast<Index>(point_.size()));
-    point_.push_back(p);
-    dist2_.push_back(0.0);
+    face_samples_[face].push_back({p, 0.0});
   }
 
-  std::vector<Eigen::Vector3d> point_;
-  std::vector<double> dist2_;
-  std::vector<std::vector<Index>> face_points_;
+  std::vector<std::vector<Sample>> face_samples_;  ///< per face: the points that belong to it
+  std::vector<Sample> moving_;                     ///< scratch of collapsed()
   BoundaryCurves curves_;
   tbb::enumerable_thread_specific<HoppeScorer> scorers_{
-      [this] { return HoppeScorer(point_, dist2_, face_points_, curves_); }};
+      [this] { return HoppeScorer(face_samples_, curves_); }};
 };
 
 }  // namespace
