@@ -28,6 +28,37 @@
 namespace lodkit::detail {
 namespace {
 
+/// A triangle's plane and the three planes through its edges at right angles to it (outward unit
+/// normals). Together they bound the distance to the triangle from below, cheaply.
+struct Prism {
+  Eigen::Vector3d normal, edge_normal[3];
+  double offset, edge_offset[3];
+
+  /// Sets the planes of triangle c[0..2]; returns |(c1 - c0) x (c2 - c0)|^2 (four times the area squared).
+  double set(const Eigen::Vector3d* c) {
+    const Eigen::Vector3d n = (c[1] - c[0]).cross(c[2] - c[0]);
+    const double area2 = n.squaredNorm();
+    const double len = std::sqrt(area2);
+    normal = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+    offset = normal.dot(c[0]);
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d outward = (c[(k + 1) % 3] - c[k]).cross(normal);
+      const double l = outward.norm();
+      edge_normal[k] = l > 0 ? Eigen::Vector3d(outward / l) : Eigen::Vector3d::Zero();
+      edge_offset[k] = edge_normal[k].dot(c[k]);
+    }
+    return area2;
+  }
+  /// No more than the squared distance from x to the triangle: the squared distance to its plane plus
+  /// the square of how far x lies outside the farthest edge plane (at right angles to each other).
+  double lower_bound2(const Eigen::Vector3d& x) const {
+    const double plane = normal.dot(x) - offset;
+    double outside = 0;
+    for (int k = 0; k < 3; ++k) outside = std::max(outside, edge_normal[k].dot(x) - edge_offset[k]);
+    return plane * plane + outside * outside;
+  }
+};
+
 /// A point sampled on the input's surface, kept with the current face it belongs to (inline, not by
 /// index: a candidate reads every point of a dozen faces, and scattered points cost a cache miss each).
 struct Sample {
@@ -74,11 +105,10 @@ inline std::pair<double, double> on_segment(const Eigen::Vector3d& x, const Eige
 // Scores candidates against the shared sample points. Each thread that scores has its own scorer:
 // the scratch below is per candidate, the points are only read.
 class HoppeScorer {
-  // A triangle of the new star, with its plane and the three planes through its edges at right angles
-  // to it (outward normals).
-  struct Tri {
-    Eigen::Vector3d c[3], normal, edge_normal[3];
-    double offset, edge_offset[3], area2, length;  ///< length: sqrt(area2), twice the area
+  // A triangle of the new star, with its planes.
+  struct Tri : Prism {
+    Eigen::Vector3d c[3];
+    double area2, length;  ///< length: sqrt(area2), twice the area
     int moving;
   };
   struct Nearest {
@@ -120,17 +150,8 @@ class HoppeScorer {
         Tri tri;
         for (int k = 0; k < 3; ++k) tri.c[k] = t[k] < 0 ? p : s.position[t[k]];
         tri.moving = t[0] < 0 ? 0 : t[1] < 0 ? 1 : 2;
-        const Eigen::Vector3d n = (tri.c[1] - tri.c[0]).cross(tri.c[2] - tri.c[0]);
-        tri.area2 = n.squaredNorm();
-        const double len = tri.length = std::sqrt(tri.area2);
-        tri.normal = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
-        tri.offset = tri.normal.dot(tri.c[0]);
-        for (int k = 0; k < 3; ++k) {
-          const Eigen::Vector3d outward = (tri.c[(k + 1) % 3] - tri.c[k]).cross(tri.normal);
-          const double l = outward.norm();
-          tri.edge_normal[k] = l > 0 ? Eigen::Vector3d(outward / l) : Eigen::Vector3d::Zero();
-          tri.edge_offset[k] = tri.edge_normal[k].dot(tri.c[k]);
-        }
+        tri.area2 = tri.set(tri.c);
+        tri.length = std::sqrt(tri.area2);
         tri_.push_back(tri);
       }
       // (Projecting in parallel did not pay: a neighbourhood holds 50-300 points, a few microseconds.)
@@ -395,6 +416,8 @@ class HoppeCost final : public CostModel {
     // more where that falls short of `min_points` in all.
     const Mesh& m = *s.input;
     const double per_face = random_points_per_face(o, s);
+    for (const Eigen::Vector3d& p : s.position) margin_ = std::max(margin_, p.cwiseAbs().maxCoeff());
+    margin_ *= 1e-9;
     std::mt19937_64 rng(o.seed);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     face_samples_.resize(s.face.size());
@@ -453,24 +476,50 @@ class HoppeCost final : public CostModel {
     moving.clear();
     for (Index f : removed_faces) moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
     for (Index f : removed_faces) face_samples_[f].clear();
+    const std::size_t removed_count = moving.size();
     const std::vector<Index>& around = s.faces_of(v);
+    counts_.clear();
     for (Index f : around) {
+      counts_.push_back(face_samples_[f].size());
       moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
       face_samples_[f].clear();
     }
-    (void)u;
-    for (Sample& sample : moving) {
-      double best = INFINITY;
-      Index best_face = -1;
-      for (Index f : around) {
-        const Eigen::Vector3d q = closest_point_on_triangle(sample.x, s.position[s.corner_point(f, 0)],
-                                                            s.position[s.corner_point(f, 1)], s.position[s.corner_point(f, 2)]);
-        const double d = (q - sample.x).squaredNorm();
-        if (d < best) best = d, best_face = f;
-      }
-      sample.dist2 = best;
-      face_samples_[best_face].push_back(sample);
+    // Each point goes to its nearest face, the first in `around` on a tie (a vertex's point is on
+    // every face at that vertex). The face it had, if any, is measured first; a face whose lower bound
+    // exceeds that distance cannot be nearer (the margin covers the bounds' rounding), so only the few
+    // others left are measured, in order.
+    prisms_.resize(around.size());
+    for (std::size_t i = 0; i < around.size(); ++i) {
+      const Eigen::Vector3d c[3] = {s.position[s.corner_point(around[i], 0)], s.position[s.corner_point(around[i], 1)],
+                                    s.position[s.corner_point(around[i], 2)]};
+      prisms_[i].set(c);
     }
+    auto distance2 = [&](const Eigen::Vector3d& x, Index f) {
+      const Eigen::Vector3d q = closest_point_on_triangle(x, s.position[s.corner_point(f, 0)], s.position[s.corner_point(f, 1)],
+                                                          s.position[s.corner_point(f, 2)]);
+      return (q - x).squaredNorm();
+    };
+    std::size_t from = 0;  // moving[from, to) came from around[i]
+    for (std::size_t i = 0; i <= around.size(); ++i) {
+      const std::size_t to = i == 0 ? removed_count : from + counts_[i - 1];
+      for (std::size_t j = from; j < to; ++j) {
+        Sample& sample = moving[j];
+        const std::size_t home = i == 0 ? around.size() : i - 1;  // none for the removed faces' points
+        const double reach = home < around.size() ? distance2(sample.x, around[home]) : INFINITY;
+        const double limit = std::isfinite(reach) ? (std::sqrt(reach) + margin_) * (std::sqrt(reach) + margin_) : INFINITY;
+        double best = INFINITY;
+        Index best_face = -1;
+        for (std::size_t k = 0; k < around.size(); ++k) {
+          if (k != home && prisms_[k].lower_bound2(sample.x) > limit) continue;
+          const double d = k == home ? reach : distance2(sample.x, around[k]);
+          if (d < best) best = d, best_face = around[k];
+        }
+        sample.dist2 = best;
+        face_samples_[best_face].push_back(sample);
+      }
+      from = to;
+    }
+    (void)u;
     if (removed_faces.size() == 1 && s.has(v, kBorder) && !curves_.point.empty()) reassign_boundary(s, u, v);
   }
 
@@ -504,7 +553,11 @@ class HoppeCost final : public CostModel {
   }
 
   std::vector<std::vector<Sample>> face_samples_;  ///< per face: the points that belong to it
-  std::vector<Sample> moving_;                     ///< scratch of collapsed()
+  // Scratch of collapsed().
+  std::vector<Sample> moving_;
+  std::vector<std::size_t> counts_;
+  std::vector<Prism> prisms_;
+  double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
   BoundaryCurves curves_;
   tbb::enumerable_thread_specific<HoppeScorer> scorers_{
       [this] { return HoppeScorer(face_samples_, curves_); }};
