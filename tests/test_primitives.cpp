@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <numbers>
+#include <random>
 
 #include "core/geometry.h"
 
@@ -141,6 +142,45 @@ TEST(Primitives, BadParametersAreClearErrors) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cone: height"), std::string::npos) << e.what();
   }
+}
+
+TEST(Geometry, TrianglePlanesBoundTheDistanceFromBelowAndMeetItInsideThePrism) {
+  // Random triangles (some thin, some slivers) and points: the bound never exceeds the squared
+  // distance beyond rounding (a sliver's normal is too uncertain: its bound is 0), and equals it (the
+  // plane distance) for points above the triangle's interior.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coord(-1.0, 1.0);
+  auto random_point = [&] { return Eigen::Vector3d(coord(rng), coord(rng), coord(rng)); };
+  int inside = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Eigen::Vector3d c[3] = {random_point(), random_point(), random_point()};
+    if (trial % 10 == 0) c[2] = c[0] + 1e-7 * random_point() + 0.5 * (c[1] - c[0]);  // a sliver
+    if (trial % 10 == 5) c[2] = c[0] + 1e-3 * random_point() + 0.5 * (c[1] - c[0]);  // thin, still bounded
+    detail::TrianglePlanes planes;
+    const double area2 = planes.set(c);
+    EXPECT_NEAR(area2, (c[1] - c[0]).cross(c[2] - c[0]).squaredNorm(), 1e-12);
+    for (int k = 0; k < 20; ++k) {
+      const Eigen::Vector3d x = 2.0 * random_point();
+      const double d2 = (detail::closest_point_on_triangle(x, c[0], c[1], c[2]) - x).squaredNorm();
+      const double bound = planes.lower_bound2(x);
+      EXPECT_LE(bound, d2 * (1 + 1e-9) + 1e-15) << "trial " << trial;
+      if (trial % 10 != 0 && trial % 10 != 5) {
+        // Above the interior (barycentric weights all positive): the bound is the distance.
+        const double a = std::uniform_real_distribution<double>(0.05, 0.9)(rng);
+        const double b = std::uniform_real_distribution<double>(0.05, 0.95 - a)(rng);
+        const Eigen::Vector3d above = c[0] + a * (c[1] - c[0]) + b * (c[2] - c[0]) + 0.3 * planes.normal;
+        const double exact = (detail::closest_point_on_triangle(above, c[0], c[1], c[2]) - above).squaredNorm();
+        EXPECT_NEAR(planes.lower_bound2(above), exact, 1e-12);
+        ++inside;
+      }
+    }
+  }
+  EXPECT_GT(inside, 0);
+  const Eigen::Vector3d sliver[3] = {{0, 0, 0}, {1, 0, 0}, {0.5, 1e-9, 0}};
+  detail::TrianglePlanes planes;
+  planes.set(sliver);
+  EXPECT_FALSE(planes.bounds);
+  EXPECT_EQ(planes.lower_bound2(Eigen::Vector3d(0.5, 3, 1)), 0.0);
 }
 
 }  // namespace

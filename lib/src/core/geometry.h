@@ -2,7 +2,9 @@
 // Small geometric kernels shared by the library (not public API). Inline: the closest-point query
 // runs tens of millions of times in hoppe's energy and the distance measurements.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 
 namespace lodkit::detail {
 
@@ -42,6 +44,45 @@ inline Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const
   const double v = vb / sum, w = vc / sum;
   return a + ab * v + ac * w;
 }
+
+/// A triangle's plane and the three planes through its edges at right angles to it (outward unit
+/// normals). Together they bound the distance to the triangle from below, cheaply; callers that skip
+/// a triangle on the bound leave a margin of about 1e-9 of the coordinates for rounding.
+struct TrianglePlanes {
+  Eigen::Vector3d normal, edge_normal[3];
+  double offset, edge_offset[3];
+  /// False for a sliver (its angle at c0 under ~1e-4 rad): its normal is too uncertain for the margin,
+  /// so the bound is 0 (see lower_bound2, and bound_planes for the same bound vectorised).
+  bool bounds = true;
+
+  /// Sets the planes of triangle c[0..2]; returns |(c1 - c0) x (c2 - c0)|^2 (four times the area squared).
+  double set(const Eigen::Vector3d* c) {
+    const Eigen::Vector3d e1 = c[1] - c[0], e2 = c[2] - c[0];
+    const Eigen::Vector3d n = e1.cross(e2);
+    const double area2 = n.squaredNorm();
+    // n's rounding error, relative, is about 1e-16 / sin(angle at c0).
+    bounds = area2 > 1e-8 * e1.squaredNorm() * e2.squaredNorm();
+    const double len = std::sqrt(area2);
+    normal = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+    offset = normal.dot(c[0]);
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d outward = (c[(k + 1) % 3] - c[k]).cross(normal);
+      const double l = outward.norm();
+      edge_normal[k] = l > 0 ? Eigen::Vector3d(outward / l) : Eigen::Vector3d::Zero();
+      edge_offset[k] = edge_normal[k].dot(c[k]);
+    }
+    return area2;
+  }
+  /// No more than the squared distance from x to the triangle: the squared distance to its plane plus
+  /// the square of how far x lies outside the farthest edge plane (at right angles to each other).
+  double lower_bound2(const Eigen::Vector3d& x) const {
+    if (!bounds) return 0.0;
+    const double plane = normal.dot(x) - offset;
+    double outside = 0;
+    for (int k = 0; k < 3; ++k) outside = std::max(outside, edge_normal[k].dot(x) - edge_offset[k]);
+    return plane * plane + outside * outside;
+  }
+};
 
 inline double triangle_area(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                             const Eigen::Vector3d& c) {

@@ -28,37 +28,6 @@
 namespace lodkit::detail {
 namespace {
 
-/// A triangle's plane and the three planes through its edges at right angles to it (outward unit
-/// normals). Together they bound the distance to the triangle from below, cheaply.
-struct Prism {
-  Eigen::Vector3d normal, edge_normal[3];
-  double offset, edge_offset[3];
-
-  /// Sets the planes of triangle c[0..2]; returns |(c1 - c0) x (c2 - c0)|^2 (four times the area squared).
-  double set(const Eigen::Vector3d* c) {
-    const Eigen::Vector3d n = (c[1] - c[0]).cross(c[2] - c[0]);
-    const double area2 = n.squaredNorm();
-    const double len = std::sqrt(area2);
-    normal = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
-    offset = normal.dot(c[0]);
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d outward = (c[(k + 1) % 3] - c[k]).cross(normal);
-      const double l = outward.norm();
-      edge_normal[k] = l > 0 ? Eigen::Vector3d(outward / l) : Eigen::Vector3d::Zero();
-      edge_offset[k] = edge_normal[k].dot(c[k]);
-    }
-    return area2;
-  }
-  /// No more than the squared distance from x to the triangle: the squared distance to its plane plus
-  /// the square of how far x lies outside the farthest edge plane (at right angles to each other).
-  double lower_bound2(const Eigen::Vector3d& x) const {
-    const double plane = normal.dot(x) - offset;
-    double outside = 0;
-    for (int k = 0; k < 3; ++k) outside = std::max(outside, edge_normal[k].dot(x) - edge_offset[k]);
-    return plane * plane + outside * outside;
-  }
-};
-
 /// A point sampled on the input's surface, kept with the current face it belongs to (inline, not by
 /// index: a candidate reads every point of a dozen faces, and scattered points cost a cache miss each).
 struct Sample {
@@ -106,7 +75,7 @@ inline std::pair<double, double> on_segment(const Eigen::Vector3d& x, const Eige
 // the scratch below is per candidate, the points are only read.
 class HoppeScorer {
   // A triangle of the new star, with its planes.
-  struct Tri : Prism {
+  struct Tri : TrianglePlanes {
     Eigen::Vector3d c[3];
     double area2, length;  ///< length: sqrt(area2), twice the area
     int moving;
@@ -260,6 +229,10 @@ class HoppeScorer {
     bounds_.resize(m);
     for (std::size_t i = 0; i < m; ++i) {
       const Tri& t = tri_[i];
+      if (!t.bounds) {  // a sliver: bound 0, always measured
+        for (int r = 0; r < 16; ++r) planes_[r * m + i] = 0.0;
+        continue;
+      }
       for (int c = 0; c < 3; ++c) {
         planes_[c * m + i] = t.normal[c];
         for (int e = 0; e < 3; ++e) planes_[(4 + 4 * e + c) * m + i] = t.edge_normal[e][c];
@@ -556,7 +529,7 @@ class HoppeCost final : public CostModel {
   // Scratch of collapsed().
   std::vector<Sample> moving_;
   std::vector<std::size_t> counts_;
-  std::vector<Prism> prisms_;
+  std::vector<TrianglePlanes> prisms_;
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
   BoundaryCurves curves_;
   tbb::enumerable_thread_specific<HoppeScorer> scorers_{
