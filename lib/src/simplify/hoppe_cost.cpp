@@ -15,15 +15,9 @@
 #include <unordered_map>
 #include <tbb/enumerable_thread_specific.h>
 
+#include "core/bound_rows.h"
 #include "core/geometry.h"
 #include "simplify/engine.h"
-
-// The bounds loop vectorises four-wide where the CPU has AVX2, chosen at load time.
-#if defined(__x86_64__) && defined(__GNUC__)
-#define LODKIT_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
-#else
-#define LODKIT_AVX2_CLONE
-#endif
 
 namespace lodkit::detail {
 namespace {
@@ -195,12 +189,14 @@ class HoppeScorer {
   // distance rules out nearly every other one through a cheap lower bound, computed for all triangles
   // at once. A point of a vanishing face has no home: the triangle with the lowest bound goes first.
   void project_all(const Eigen::Vector3d& p, bool solve) {
-    load_planes();
     const std::size_t m = tri_.size();
+    rows_.resize(m);
+    for (std::size_t i = 0; i < m; ++i) rows_.set(i, tri_[i]);
+    bounds_.resize(m);
     nearest_.resize(points_.size());
     for (std::size_t j = 0; j < points_.size(); ++j) {
       const Eigen::Vector3d& x = points_[j];
-      lower_bounds2(planes_.data(), m, x, bounds_.data());
+      rows_.lower_bounds2(x, bounds_.data());
       // Home first (or the lowest bound when there is none), then the rest in index order, the first
       // one taking the first's place.
       std::size_t first = 0;
@@ -218,48 +214,6 @@ class HoppeScorer {
         const Nearest c = on_triangle(x, tri_[k], p, solve);
         if (c.d2 < out.d2) out = c;
       }
-    }
-  }
-
-  // The planes of every triangle of the star, side by side (see lower_bounds2), so that one point's
-  // bounds against all of them vectorise.
-  void load_planes() {
-    const std::size_t m = tri_.size();
-    planes_.resize(16 * m);
-    bounds_.resize(m);
-    for (std::size_t i = 0; i < m; ++i) {
-      const Tri& t = tri_[i];
-      if (!t.bounds) {  // a sliver: bound 0, always measured
-        for (int r = 0; r < 16; ++r) planes_[r * m + i] = 0.0;
-        continue;
-      }
-      for (int c = 0; c < 3; ++c) {
-        planes_[c * m + i] = t.normal[c];
-        for (int e = 0; e < 3; ++e) planes_[(4 + 4 * e + c) * m + i] = t.edge_normal[e][c];
-      }
-      planes_[3 * m + i] = t.offset;
-      for (int e = 0; e < 3; ++e) planes_[(7 + 4 * e) * m + i] = t.edge_offset[e];
-    }
-  }
-
-  // Squared lower bounds of the distance from x to m triangles, into out: the distance to each one's
-  // plane, combined at right angles with how far x lies outside the planes through its edges. The
-  // planes are laid out as rows of m: normal x, y, z, offset, then each edge plane's x, y, z, offset.
-  LODKIT_AVX2_CLONE static void lower_bounds2(const double* __restrict planes, std::size_t m,
-                                              const Eigen::Vector3d& x, double* __restrict out) {
-    const double x0 = x[0], x1 = x[1], x2 = x[2];
-    auto row = [&](int r) { return planes + std::size_t(r) * m; };
-    const double *nx = row(0), *ny = row(1), *nz = row(2), *no = row(3);
-    const double *ax = row(4), *ay = row(5), *az = row(6), *ao = row(7);
-    const double *bx = row(8), *by = row(9), *bz = row(10), *bo = row(11);
-    const double *cx = row(12), *cy = row(13), *cz = row(14), *co = row(15);
-    for (std::size_t i = 0; i < m; ++i) {
-      const double plane = nx[i] * x0 + ny[i] * x1 + nz[i] * x2 - no[i];
-      const double a = ax[i] * x0 + ay[i] * x1 + az[i] * x2 - ao[i];
-      const double b = bx[i] * x0 + by[i] * x1 + bz[i] * x2 - bo[i];
-      const double c = cx[i] * x0 + cy[i] * x1 + cz[i] * x2 - co[i];
-      const double outside = std::max(std::max(a, b), std::max(c, 0.0));
-      out[i] = plane * plane + outside * outside;
     }
   }
 
@@ -372,7 +326,8 @@ class HoppeScorer {
   std::vector<std::array<Index, 3>> star_;
   std::vector<Tri> tri_;
   std::vector<Nearest> nearest_;  ///< per point of points_: its projection onto the new star
-  std::vector<double> planes_, bounds_;  ///< the star's planes (see lower_bounds2) and one point's bounds
+  BoundRows rows_;               ///< the star's planes
+  std::vector<double> bounds_;  ///< one point's bounds against them
   struct Projection {
     Eigen::Vector3d x;  // the sample point
     double weight, b;
@@ -461,11 +416,14 @@ class HoppeCost final : public CostModel {
     // every face at that vertex). The face it had, if any, is measured first; a face whose lower bound
     // exceeds that distance cannot be nearer (the margin covers the bounds' rounding), so only the few
     // others left are measured, in order.
-    prisms_.resize(around.size());
+    rows_.resize(around.size());
+    bounds_.resize(around.size());
     for (std::size_t i = 0; i < around.size(); ++i) {
       const Eigen::Vector3d c[3] = {s.position[s.corner_point(around[i], 0)], s.position[s.corner_point(around[i], 1)],
                                     s.position[s.corner_point(around[i], 2)]};
-      prisms_[i].set(c);
+      TrianglePlanes planes;
+      planes.set(c);
+      rows_.set(i, planes);
     }
     auto distance2 = [&](const Eigen::Vector3d& x, Index f) {
       const Eigen::Vector3d q = closest_point_on_triangle(x, s.position[s.corner_point(f, 0)], s.position[s.corner_point(f, 1)],
@@ -482,8 +440,9 @@ class HoppeCost final : public CostModel {
         const double limit = std::isfinite(reach) ? (std::sqrt(reach) + margin_) * (std::sqrt(reach) + margin_) : INFINITY;
         double best = INFINITY;
         Index best_face = -1;
+        rows_.lower_bounds2(sample.x, bounds_.data());
         for (std::size_t k = 0; k < around.size(); ++k) {
-          if (k != home && prisms_[k].lower_bound2(sample.x) > limit) continue;
+          if (k != home && bounds_[k] > limit) continue;
           const double d = k == home ? reach : distance2(sample.x, around[k]);
           if (d < best) best = d, best_face = around[k];
         }
@@ -529,7 +488,8 @@ class HoppeCost final : public CostModel {
   // Scratch of collapsed().
   std::vector<Sample> moving_;
   std::vector<std::size_t> counts_;
-  std::vector<TrianglePlanes> prisms_;
+  BoundRows rows_;
+  std::vector<double> bounds_;
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
   BoundaryCurves curves_;
   tbb::enumerable_thread_specific<HoppeScorer> scorers_{

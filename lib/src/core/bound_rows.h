@@ -1,0 +1,42 @@
+#pragma once
+// Lower bounds of a point's distance to many triangles at once (not public API).
+#include <cstddef>
+#include <vector>
+
+#include "core/geometry.h"
+
+namespace lodkit::detail {
+
+/// The planes of m triangles side by side (rows of m: normal x, y, z, offset, then each edge plane's
+/// x, y, z, offset), so that one point's bounds against all of them vectorise: four triangles per
+/// instruction where the CPU has AVX2, chosen at load time.
+class BoundRows {
+ public:
+  /// Room for m triangles; set each with set().
+  void resize(std::size_t m) {
+    m_ = m;
+    rows_.resize(16 * m);
+  }
+  std::size_t size() const { return m_; }
+  /// Triangle i's planes (a sliver's bound is 0, as TrianglePlanes::lower_bound2 has it).
+  void set(std::size_t i, const TrianglePlanes& t) {
+    if (!t.bounds) {
+      for (int r = 0; r < 16; ++r) rows_[r * m_ + i] = 0.0;
+      return;
+    }
+    for (int c = 0; c < 3; ++c) {
+      rows_[c * m_ + i] = t.normal[c];
+      for (int e = 0; e < 3; ++e) rows_[(4 + 4 * e + c) * m_ + i] = t.edge_normal[e][c];
+    }
+    rows_[3 * m_ + i] = t.offset;
+    for (int e = 0; e < 3; ++e) rows_[(7 + 4 * e) * m_ + i] = t.edge_offset[e];
+  }
+  /// out[i]: no more than the squared distance from x to triangle i (see TrianglePlanes::lower_bound2).
+  void lower_bounds2(const Eigen::Vector3d& x, double* out) const;
+
+ private:
+  std::size_t m_ = 0;
+  std::vector<double> rows_;
+};
+
+}  // namespace lodkit::detail
