@@ -403,7 +403,7 @@ class HoppeCost final : public CostModel {
     std::vector<Sample>& moving = moving_;
     moving.clear();
     for (Index f : removed_faces) moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
-    for (Index f : removed_faces) face_samples_[f].clear();
+    for (Index f : removed_faces) std::vector<Sample>().swap(face_samples_[f]);  // gone for good: free it
     const std::size_t removed_count = moving.size();
     const std::vector<Index>& around = s.faces_of(v);
     counts_.clear();
