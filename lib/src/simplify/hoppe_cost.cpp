@@ -451,7 +451,6 @@ class HoppeCost final : public CostModel {
       }
       from = to;
     }
-    (void)u;
     if (removed_faces.size() == 1 && s.has(v, kBorder) && !curves_.point.empty()) reassign_boundary(s, u, v);
   }
 
