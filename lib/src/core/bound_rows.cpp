@@ -32,8 +32,9 @@ LODKIT_AVX2_CLONE void bounds_of_rows(const double* __restrict planes, std::size
 
 }  // namespace
 
-void BoundRows::lower_bounds2(const Eigen::Vector3d& x, double* out) const {
-  bounds_of_rows(rows_.data(), m_, x, out);
+const double* BoundRows::lower_bounds2(const Eigen::Vector3d& x) {
+  bounds_of_rows(rows_.data(), m_, x, bounds_.data());
+  return bounds_.data();
 }
 
 }  // namespace lodkit::detail

@@ -16,8 +16,8 @@ class BoundRows {
   void resize(std::size_t m) {
     m_ = m;
     rows_.resize(16 * m);
+    bounds_.resize(m);
   }
-  std::size_t size() const { return m_; }
   /// Triangle i's planes (a sliver's bound is 0, as TrianglePlanes::lower_bound2 has it).
   void set(std::size_t i, const TrianglePlanes& t) {
     if (!t.bounds) {
@@ -31,12 +31,14 @@ class BoundRows {
     rows_[3 * m_ + i] = t.offset;
     for (int e = 0; e < 3; ++e) rows_[(7 + 4 * e) * m_ + i] = t.edge_offset[e];
   }
-  /// out[i]: no more than the squared distance from x to triangle i (see TrianglePlanes::lower_bound2).
-  void lower_bounds2(const Eigen::Vector3d& x, double* out) const;
+  /// For each triangle i, no more than the squared distance from x to it (see
+  /// TrianglePlanes::lower_bound2); valid until the next call.
+  const double* lower_bounds2(const Eigen::Vector3d& x);
 
  private:
   std::size_t m_ = 0;
   std::vector<double> rows_;
+  std::vector<double> bounds_;  ///< the last point's bounds
 };
 
 }  // namespace lodkit::detail

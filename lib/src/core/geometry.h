@@ -52,7 +52,7 @@ struct TrianglePlanes {
   Eigen::Vector3d normal, edge_normal[3];
   double offset, edge_offset[3];
   /// False for a sliver (its angle at c0 under ~1e-4 rad): its normal is too uncertain for the margin,
-  /// so the bound is 0 (see lower_bound2, and bound_planes for the same bound vectorised).
+  /// so the bound is 0 (here and in BoundRows, the same bound vectorised).
   bool bounds = true;
 
   /// Sets the planes of triangle c[0..2]; returns |(c1 - c0) x (c2 - c0)|^2 (four times the area squared).

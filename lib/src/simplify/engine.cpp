@@ -239,12 +239,9 @@ void Engine::setup(const Mesh& mesh) {
     if (e.faces == 1) {
       s_.flags[e.lo] |= kBorder, s_.flags[e.hi] |= kBorder;
       const Index f = face_id[e.face[0]];
-      for (int k = 0; k < 3; ++k) {
-        const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
-        if (std::min(p0, p1) != e.lo || std::max(p0, p1) != e.hi) continue;
-        border_side[3 * std::size_t(f) + k] = 1;
-        s_.input_boundary.push_back({p0, p1});
-      }
+      const int k = s_.side(f, e.lo, e.hi);
+      border_side[3 * std::size_t(f) + k] = 1;
+      s_.input_boundary.push_back({s_.corner_point(f, k), s_.corner_point(f, (k + 1) % 3)});
     }
     if (e.faces > 2 || !e.consistent) s_.flags[e.lo] |= kLocked, s_.flags[e.hi] |= kLocked;
   }
@@ -308,10 +305,7 @@ void Engine::add_crease_planes(const std::vector<Index>& face_id) {
     if (e.faces != 2 || !e.consistent) continue;
     const Index f0 = face_id[e.face[0]], f1 = face_id[e.face[1]];
     const Index f = std::min(f0, f1);
-    for (int k = 0; k < 3; ++k) {
-      const Index p0 = s_.corner_point(f, k), p1 = s_.corner_point(f, (k + 1) % 3);
-      if ((p0 == e.lo && p1 == e.hi) || (p0 == e.hi && p1 == e.lo)) across[3 * std::size_t(f) + k] = std::max(f0, f1);
-    }
+    across[3 * std::size_t(f) + s_.side(f, e.lo, e.hi)] = std::max(f0, f1);
   }
   for (Index f = 0; f < faces; ++f) {
     for (int k = 0; k < 3; ++k) {

@@ -48,6 +48,14 @@ struct EngineState {
 
   Index corner_point(Index f, int k) const { return face_point[f][k]; }
   bool has(Index p, PointFlag flag) const { return flags[p] & flag; }
+  /// The side k of face f that joins points a and b (from corner k to k + 1, either way), or -1.
+  int side(Index f, Index a, Index b) const {
+    for (int k = 0; k < 3; ++k) {
+      const Index p0 = corner_point(f, k), p1 = corner_point(f, (k + 1) % 3);
+      if ((p0 == a && p1 == b) || (p0 == b && p1 == a)) return k;
+    }
+    return -1;
+  }
   /// Alive faces of point p (a collapse prunes the dead ones from the lists it touches).
   const std::vector<Index>& faces_of(Index p) const { return point_faces[p]; }
   /// The points around p (each once with `repeats` false, else once per face that has it), sorted.

@@ -71,7 +71,7 @@ class HoppeScorer {
   // A triangle of the new star, with its planes.
   struct Tri : TrianglePlanes {
     Eigen::Vector3d c[3];
-    double area2, length;  ///< length: sqrt(area2), twice the area
+    double length;  ///< |(c1 - c0) x (c2 - c0)|, twice the area
     int moving;
   };
   struct Nearest {
@@ -106,15 +106,13 @@ class HoppeScorer {
       worst = 0;
       projections_.clear();
       Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-      // The star's triangles, each with its plane and the three planes through its edges at right
-      // angles to it (outward): together they bound the distance to the triangle from below.
+      // The star's triangles, with the planes that bound the distance to each from below.
       tri_.clear();
       for (const auto& t : star_) {
         Tri tri;
         for (int k = 0; k < 3; ++k) tri.c[k] = t[k] < 0 ? p : s.position[t[k]];
         tri.moving = t[0] < 0 ? 0 : t[1] < 0 ? 1 : 2;
-        tri.area2 = tri.set(tri.c);
-        tri.length = std::sqrt(tri.area2);
+        tri.length = std::sqrt(tri.set(tri.c));
         tri_.push_back(tri);
       }
       // (Projecting in parallel did not pay: a neighbourhood holds 50-300 points, a few microseconds.)
@@ -192,11 +190,10 @@ class HoppeScorer {
     const std::size_t m = tri_.size();
     rows_.resize(m);
     for (std::size_t i = 0; i < m; ++i) rows_.set(i, tri_[i]);
-    bounds_.resize(m);
     nearest_.resize(points_.size());
     for (std::size_t j = 0; j < points_.size(); ++j) {
       const Eigen::Vector3d& x = points_[j];
-      rows_.lower_bounds2(x, bounds_.data());
+      const double* bounds = rows_.lower_bounds2(x);
       // Home first (or the lowest bound when there is none), then the rest in index order, the first
       // one taking the first's place.
       std::size_t first = 0;
@@ -204,13 +201,13 @@ class HoppeScorer {
         first = std::size_t(home_[j]);
       } else {
         for (std::size_t k = 1; k < m; ++k)
-          if (bounds_[k] < bounds_[first]) first = k;
+          if (bounds[k] < bounds[first]) first = k;
       }
       Nearest& out = nearest_[j];
       out = on_triangle(x, tri_[first], p, solve);
       for (std::size_t n = 1; n < m; ++n) {
         const std::size_t k = n == first ? 0 : n;
-        if (bounds_[k] >= out.d2) continue;
+        if (bounds[k] >= out.d2) continue;
         const Nearest c = on_triangle(x, tri_[k], p, solve);
         if (c.d2 < out.d2) out = c;
       }
@@ -225,7 +222,7 @@ class HoppeScorer {
     if (solve) {
       const int m = t.moving;
       const Eigen::Vector3d e1 = t.c[(m + 1) % 3] - q, e2 = t.c[(m + 2) % 3] - q;
-      out.b = t.area2 > 0 ? std::clamp(e1.cross(e2).dot(t.normal) / t.length, 0.0, 1.0) : 0.0;
+      out.b = t.length > 0 ? std::clamp(e1.cross(e2).dot(t.normal) / t.length, 0.0, 1.0) : 0.0;
       out.fixed = q - out.b * p;
     }
     return out;
@@ -326,8 +323,7 @@ class HoppeScorer {
   std::vector<std::array<Index, 3>> star_;
   std::vector<Tri> tri_;
   std::vector<Nearest> nearest_;  ///< per point of points_: its projection onto the new star
-  BoundRows rows_;               ///< the star's planes
-  std::vector<double> bounds_;  ///< one point's bounds against them
+  BoundRows rows_;  ///< the star's planes
   struct Projection {
     Eigen::Vector3d x;  // the sample point
     double weight, b;
@@ -400,24 +396,26 @@ class HoppeCost final : public CostModel {
 
   void collapsed(EngineState& s, Index u, Index v, const std::vector<Index>& removed_faces) override {
     // Re-assign the points of the old neighbourhood to the faces now around v.
-    std::vector<Sample>& moving = moving_;
-    moving.clear();
-    for (Index f : removed_faces) moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
-    for (Index f : removed_faces) std::vector<Sample>().swap(face_samples_[f]);  // gone for good: free it
-    const std::size_t removed_count = moving.size();
+    // Each point with the index in `around` of the face it had (none for a vanished face's points).
     const std::vector<Index>& around = s.faces_of(v);
-    counts_.clear();
-    for (Index f : around) {
-      counts_.push_back(face_samples_[f].size());
-      moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
-      face_samples_[f].clear();
+    const std::size_t none = around.size();
+    moving_.clear(), home_.clear();
+    for (Index f : removed_faces) {
+      moving_.insert(moving_.end(), face_samples_[f].begin(), face_samples_[f].end());
+      home_.resize(moving_.size(), none);
+      std::vector<Sample>().swap(face_samples_[f]);  // gone for good: free it
+    }
+    for (std::size_t i = 0; i < around.size(); ++i) {
+      auto& list = face_samples_[around[i]];
+      moving_.insert(moving_.end(), list.begin(), list.end());
+      home_.resize(moving_.size(), i);
+      list.clear();
     }
     // Each point goes to its nearest face, the first in `around` on a tie (a vertex's point is on
     // every face at that vertex). The face it had, if any, is measured first; a face whose lower bound
     // exceeds that distance cannot be nearer (the margin covers the bounds' rounding), so only the few
     // others left are measured, in order.
     rows_.resize(around.size());
-    bounds_.resize(around.size());
     for (std::size_t i = 0; i < around.size(); ++i) {
       const Eigen::Vector3d c[3] = {s.position[s.corner_point(around[i], 0)], s.position[s.corner_point(around[i], 1)],
                                     s.position[s.corner_point(around[i], 2)]};
@@ -430,26 +428,21 @@ class HoppeCost final : public CostModel {
                                                           s.position[s.corner_point(f, 2)]);
       return (q - x).squaredNorm();
     };
-    std::size_t from = 0;  // moving[from, to) came from around[i]
-    for (std::size_t i = 0; i <= around.size(); ++i) {
-      const std::size_t to = i == 0 ? removed_count : from + counts_[i - 1];
-      for (std::size_t j = from; j < to; ++j) {
-        Sample& sample = moving[j];
-        const std::size_t home = i == 0 ? around.size() : i - 1;  // none for the removed faces' points
-        const double reach = home < around.size() ? distance2(sample.x, around[home]) : INFINITY;
-        const double limit = std::isfinite(reach) ? (std::sqrt(reach) + margin_) * (std::sqrt(reach) + margin_) : INFINITY;
-        double best = INFINITY;
-        Index best_face = -1;
-        rows_.lower_bounds2(sample.x, bounds_.data());
-        for (std::size_t k = 0; k < around.size(); ++k) {
-          if (k != home && bounds_[k] > limit) continue;
-          const double d = k == home ? reach : distance2(sample.x, around[k]);
-          if (d < best) best = d, best_face = around[k];
-        }
-        sample.dist2 = best;
-        face_samples_[best_face].push_back(sample);
+    for (std::size_t j = 0; j < moving_.size(); ++j) {
+      Sample& sample = moving_[j];
+      const std::size_t home = home_[j];
+      const double reach = home != none ? distance2(sample.x, around[home]) : INFINITY;
+      const double limit = std::isfinite(reach) ? (std::sqrt(reach) + margin_) * (std::sqrt(reach) + margin_) : INFINITY;
+      double best = INFINITY;
+      Index best_face = -1;
+      const double* bounds = rows_.lower_bounds2(sample.x);
+      for (std::size_t k = 0; k < around.size(); ++k) {
+        if (k != home && bounds[k] > limit) continue;
+        const double d = k == home ? reach : distance2(sample.x, around[k]);
+        if (d < best) best = d, best_face = around[k];
       }
-      from = to;
+      sample.dist2 = best;
+      face_samples_[best_face].push_back(sample);
     }
     if (removed_faces.size() == 1 && s.has(v, kBorder) && !curves_.point.empty()) reassign_boundary(s, u, v);
   }
@@ -486,9 +479,8 @@ class HoppeCost final : public CostModel {
   std::vector<std::vector<Sample>> face_samples_;  ///< per face: the points that belong to it
   // Scratch of collapsed().
   std::vector<Sample> moving_;
-  std::vector<std::size_t> counts_;
+  std::vector<std::size_t> home_;  ///< per point of moving_: its face's index in faces_of(v)
   BoundRows rows_;
-  std::vector<double> bounds_;
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
   BoundaryCurves curves_;
   tbb::enumerable_thread_specific<HoppeScorer> scorers_{
