@@ -64,6 +64,7 @@ struct Lane {
   Probe probe;
   std::vector<Index> ring, ring_u, ring_v, ring_tmp;
   std::vector<std::optional<HeapEntry>> rated;
+  std::vector<Candidate> rated_candidates;  ///< with rated, when scores are remembered
   std::vector<std::pair<Index, Index>> ring_edges, rescore;
 };
 
@@ -79,6 +80,7 @@ class Engine {
       case SimplifyMethod::Hoppe: cost_ = make_hoppe_cost(o_, s_); break;
     }
     cos_max_turn_ = std::cos(o_.max_normal_change_deg * std::numbers::pi / 180.0);
+    if (cost_->costly()) scored_.resize(s_.position.size());
   }
 
   SimplifyResult run(Index target);
@@ -98,15 +100,24 @@ class Engine {
   Rejection map_wedges(Index u, Index v, Probe& probe) const;
   Index wedge_at(Index f, Index p) const;
   Rejection geometry(Index u, Index v, const Eigen::Vector3d& p);
-  /// The checks and the cost of u -> v, into lane.probe (the path that collapses).
-  Rejection evaluate(Lane& lane, Index u, Index v, Candidate& c, bool full);
-  /// The queue entry of edge ab, in its cheaper legal direction, if either is (thread-safe).
-  std::optional<HeapEntry> rate_edge(Index a, Index b, Index region, std::array<Probe, 2>& probes);
+  /// The checks and the cost of u -> v, into lane.probe (the path that collapses). With `scored`, c
+  /// already holds the cost of u -> v in the current state (recall()) and is not computed again.
+  Rejection evaluate(Lane& lane, Index u, Index v, Candidate& c, bool full, bool scored = false);
+  /// Costly costs only: keeps the candidate behind queue entry e (from the main thread), so that it
+  /// need not be scored again when e reaches the top unchanged.
+  void remember(const HeapEntry& e, const Candidate& c);
+  /// The candidate remember() kept for e, if e's tags still match it.
+  bool recall(const HeapEntry& e, Candidate& c) const;
+  /// The queue entry of edge ab, in its cheaper legal direction, if either is (thread-safe); that
+  /// direction's candidate into `chosen` when given.
+  std::optional<HeapEntry> rate_edge(Index a, Index b, Index region, std::array<Probe, 2>& probes,
+                                     Candidate* chosen = nullptr);
   /// Rates the edges (side by side when they are many, or costly) and queues them in list order, so
   /// the queue is the same whatever the number of threads.
   void push_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& edges);
-  /// Rates the edges side by side into lane.rated, in list order.
-  void rate_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& edges);
+  /// Rates the edges side by side into lane.rated, in list order (with `keep`, and their candidates into
+  /// lane.rated_candidates).
+  void rate_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& edges, bool keep);
   /// Both ends inside the slab (region -1: anywhere, and always once the lanes are done).
   bool inside(Index region, Index u, Index v) const {
     return region < 0 || (region_[u] == region && region_[v] == region);
@@ -155,6 +166,15 @@ class Engine {
   Lane main_;  // the whole run's, or the last part's after the lanes
   std::vector<std::uint32_t> version_;
   std::vector<std::uint32_t> dirty_;  // bumped when a point's neighbourhood energy changed (wide updates)
+  // Costly costs only (hoppe): per point u, the last candidate scored for each of its edges u -> v.
+  // Scoring the top entry again before collapsing it took a tenth of a hoppe run, on the one thread
+  // that cannot share it; its tags say whether it still holds.
+  struct Scored {
+    Index v;
+    std::uint32_t version, epoch;  // the entry's tags
+    Candidate c;
+  };
+  std::vector<std::vector<Scored>> scored_;
   double cos_max_turn_ = 0;
   std::vector<EdgeUse> edges_;  // every edge of the input, from setup() until run() has queued them
   std::vector<Index> canonical_;  // per input vertex: the first vertex identical to it
@@ -513,17 +533,38 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
   return Rejection::None;
 }
 
-Rejection Engine::evaluate(Lane& lane, Index u, Index v, Candidate& c, bool full) {
+Rejection Engine::evaluate(Lane& lane, Index u, Index v, Candidate& c, bool full, bool scored) {
   if (!inside(lane.region, u, v)) return Rejection::Locked;
   find_shared_faces(u, v, lane.probe);
   Freedom freedom;
   if (const Rejection r = structure(u, v, freedom, full ? &lane : nullptr, lane.probe); r != Rejection::None) return r;
-  if (!cost_->score(s_, lane.probe, u, v, freedom, c)) return Rejection::Cost;
+  if (!scored && !cost_->score(s_, lane.probe, u, v, freedom, c)) return Rejection::Cost;
   if (o_.max_error && c.error > *o_.max_error) return Rejection::ErrorLimit;
   return full ? geometry(u, v, c.position) : Rejection::None;
 }
 
-std::optional<HeapEntry> Engine::rate_edge(Index a, Index b, Index region, std::array<Probe, 2>& probes) {
+void Engine::remember(const HeapEntry& e, const Candidate& c) {
+  if (scored_.empty()) return;
+  // Drop what this edge had and every entry a collapse since voided or outdated (never recalled).
+  auto& list = scored_[e.u];
+  std::erase_if(list, [&](const Scored& s) {
+    return s.v == e.v || s.version != version_[e.u] + version_[s.v] || s.epoch != dirty_[e.u] + dirty_[s.v];
+  });
+  list.push_back({e.v, e.version, e.epoch, c});
+}
+
+bool Engine::recall(const HeapEntry& e, Candidate& c) const {
+  if (scored_.empty()) return false;
+  for (const Scored& s : scored_[e.u])
+    if (s.v == e.v && s.version == e.version && s.epoch == e.epoch) {
+      c = s.c;
+      return true;
+    }
+  return false;
+}
+
+std::optional<HeapEntry> Engine::rate_edge(Index a, Index b, Index region, std::array<Probe, 2>& probes,
+                                           Candidate* chosen) {
   // Cheap checks per direction, then the cost. When neither end is constrained both directions merge
   // into the same vertex at the same place (unless placement is at an endpoint): score one.
   if (!inside(region, a, b)) return std::nullopt;
@@ -545,6 +586,7 @@ std::optional<HeapEntry> Engine::rate_edge(Index a, Index b, Index region, std::
   const bool scored_b = !symmetric && ok_b && score(b, a, fb, pb, cb);
   if (!scored_a && !scored_b) return std::nullopt;
   const bool use_a = scored_a && (!scored_b || ca.cost <= cb.cost);
+  if (chosen) *chosen = use_a ? ca : cb;
   return entry(use_a ? ca.cost : cb.cost, use_a ? a : b, use_a ? b : a);
 }
 
@@ -555,22 +597,28 @@ void Engine::push_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& 
   const bool costly = cost_->costly();
   if (n < (costly ? 4u : 4096u)) {
     auto& probes = probes_.local();
+    Candidate c;
     for (const auto& [a, b] : edges)
-      if (const auto e = rate_edge(a, b, lane.region, probes)) lane.queue.push(*e);
+      if (const auto e = rate_edge(a, b, lane.region, probes, &c)) lane.queue.push(*e), remember(*e, c);
     return;
   }
-  rate_edges(lane, edges);
-  for (const auto& e : lane.rated)
-    if (e) lane.queue.push(*e);
+  rate_edges(lane, edges, !scored_.empty());
+  for (std::size_t i = 0; i < n; ++i)
+    if (const auto& e = lane.rated[i]) {
+      lane.queue.push(*e);
+      if (!scored_.empty()) remember(*e, lane.rated_candidates[i]);
+    }
 }
 
-void Engine::rate_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& edges) {
+void Engine::rate_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& edges, bool keep) {
   lane.rated.assign(edges.size(), std::nullopt);
+  lane.rated_candidates.resize(keep ? edges.size() : 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), cost_->costly() ? 1 : 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       auto& probes = probes_.local();
                       for (std::size_t i = r.begin(); i < r.end(); ++i)
-                        lane.rated[i] = rate_edge(edges[i].first, edges[i].second, lane.region, probes);
+                        lane.rated[i] = rate_edge(edges[i].first, edges[i].second, lane.region, probes,
+                                                  keep ? &lane.rated_candidates[i] : nullptr);
                     });
 }
 
@@ -632,6 +680,7 @@ void Engine::collapse(Lane& lane, Index u, Index v, const Candidate& c) {
   }
   lane.stale_estimate += s_.point_faces[u].size() + s_.point_faces[v].size();
   s_.point_faces[u].clear();
+  if (!scored_.empty()) std::vector<Scored>().swap(scored_[u]);  // u is gone
   s_.position[v] = c.position;
   s_.quadric[v] += s_.quadric[u];
   s_.flags[u] |= kRemoved;
@@ -733,10 +782,15 @@ void Engine::drain(Lane& lane, Done done, std::optional<std::pair<Index, Index>>
       push_edges(lane, lane.rescore);
       continue;
     }
-    if (evaluate(lane, e.u, e.v, c, true) != Rejection::None) {
+    const bool scored = recall(e, c);
+    if (evaluate(lane, e.u, e.v, c, true, scored) != Rejection::None) {
       // The best direction is illegal now; the other one may still be worth queueing.
       Candidate r;
-      if (evaluate(lane, e.v, e.u, r, true) == Rejection::None) queue.push(entry(r.cost, e.v, e.u));
+      if (evaluate(lane, e.v, e.u, r, true) == Rejection::None) {
+        const HeapEntry other = entry(r.cost, e.v, e.u);
+        queue.push(other);
+        remember(other, r);
+      }
       continue;
     }
     if (lane.region < 0 && s_.alive_faces - static_cast<Index>(lane.probe.shared.size()) < target_) {
@@ -843,7 +897,9 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
 }
 
 std::vector<HeapEntry> Engine::rate_all(const std::vector<std::pair<Index, Index>>& edges) {
-  rate_edges(main_, edges);
+  // (Their candidates are not kept: most are re-scored before they reach the top, and keeping them
+  // all cost a fifth more memory at the peak.)
+  rate_edges(main_, edges, false);
   std::vector<HeapEntry> entries;
   entries.reserve(edges.size());
   for (const auto& e : main_.rated)
