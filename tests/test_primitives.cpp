@@ -8,6 +8,7 @@
 #include <numbers>
 #include <random>
 
+#include "core/bound_rows.h"
 #include "core/geometry.h"
 
 namespace lodkit {
@@ -181,6 +182,51 @@ TEST(Geometry, TrianglePlanesBoundTheDistanceFromBelowAndMeetItInsideThePrism) {
   planes.set(sliver);
   EXPECT_FALSE(planes.bounds);
   EXPECT_EQ(planes.lower_bound2(Eigen::Vector3d(0.5, 3, 1)), 0.0);
+}
+
+TEST(Geometry, BoundRowsGiveEachTrianglesBoundAndPlaneDistanceAndTheExactDistanceInsideItsPrism) {
+  // Many triangles at once (their count not a multiple of the vector width; every tenth a sliver):
+  // the same bounds as TrianglePlanes one by one, the signed plane distances, and where a bound equals
+  // its plane distance squared (no edge plane has x outside), the squared distance itself: hoppe's
+  // scorer takes it there instead of walking the triangle's regions.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> coord(-1.0, 1.0);
+  auto random_point = [&] { return Eigen::Vector3d(coord(rng), coord(rng), coord(rng)); };
+  constexpr std::size_t kTriangles = 13;
+  std::vector<std::array<Eigen::Vector3d, 3>> tris(kTriangles);
+  std::vector<detail::TrianglePlanes> planes(kTriangles);
+  detail::BoundRows rows;
+  rows.resize(kTriangles);
+  for (std::size_t i = 0; i < kTriangles; ++i) {
+    tris[i] = {random_point(), random_point(), random_point()};
+    if (i % 10 == 3) tris[i][2] = tris[i][0] + 1e-7 * random_point() + 0.5 * (tris[i][1] - tris[i][0]);
+    planes[i].set(tris[i].data());
+    rows.set(i, planes[i]);
+  }
+  int exact = 0, walked = 0;
+  for (int trial = 0; trial < 5000; ++trial) {
+    const Eigen::Vector3d x = 1.5 * random_point();
+    const double* bounds = rows.lower_bounds2(x);
+    const double* plane = rows.plane_distances();
+    for (std::size_t i = 0; i < kTriangles; ++i) {
+      EXPECT_NEAR(bounds[i], planes[i].lower_bound2(x), 1e-12);
+      if (!planes[i].bounds) {
+        EXPECT_EQ(bounds[i], 0.0);
+        continue;
+      }
+      EXPECT_NEAR(plane[i], planes[i].normal.dot(x) - planes[i].offset, 1e-12);
+      const double d2 = (detail::closest_point_on_triangle(x, tris[i][0], tris[i][1], tris[i][2]) - x).squaredNorm();
+      if (bounds[i] == plane[i] * plane[i]) {
+        EXPECT_NEAR(bounds[i], d2, 1e-12 * (1 + d2)) << "trial " << trial << ", triangle " << i;
+        ++exact;
+      } else {
+        EXPECT_LT(bounds[i], d2 * (1 + 1e-9) + 1e-15);
+        ++walked;
+      }
+    }
+  }
+  EXPECT_GT(exact, 1000);
+  EXPECT_GT(walked, 1000);
 }
 
 }  // namespace

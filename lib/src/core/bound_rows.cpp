@@ -13,7 +13,7 @@ namespace lodkit::detail {
 namespace {
 
 LODKIT_AVX2_CLONE void bounds_of_rows(const double* __restrict planes, std::size_t m, const Eigen::Vector3d& x,
-                                      double* __restrict out) {
+                                      double* __restrict out, double* __restrict out_plane) {
   const double x0 = x[0], x1 = x[1], x2 = x[2];
   auto row = [&](int r) { return planes + std::size_t(r) * m; };
   const double *nx = row(0), *ny = row(1), *nz = row(2), *no = row(3);
@@ -27,13 +27,14 @@ LODKIT_AVX2_CLONE void bounds_of_rows(const double* __restrict planes, std::size
     const double c = cx[i] * x0 + cy[i] * x1 + cz[i] * x2 - co[i];
     const double outside = std::max(std::max(a, b), std::max(c, 0.0));
     out[i] = plane * plane + outside * outside;
+    out_plane[i] = plane;
   }
 }
 
 }  // namespace
 
 const double* BoundRows::lower_bounds2(const Eigen::Vector3d& x) {
-  bounds_of_rows(rows_.data(), m_, x, bounds_.data());
+  bounds_of_rows(rows_.data(), m_, x, bounds_.data(), planes_.data());
   return bounds_.data();
 }
 

@@ -17,6 +17,7 @@ class BoundRows {
     m_ = m;
     rows_.resize(16 * m);
     bounds_.resize(m);
+    planes_.resize(m);
   }
   /// Triangle i's planes (a sliver's bound is 0, as TrianglePlanes::lower_bound2 has it).
   void set(std::size_t i, const TrianglePlanes& t) {
@@ -34,11 +35,16 @@ class BoundRows {
   /// For each triangle i, no more than the squared distance from x to it (see
   /// TrianglePlanes::lower_bound2); valid until the next call.
   const double* lower_bounds2(const Eigen::Vector3d& x);
+  /// For each triangle i, x's signed distance to its plane, from the last lower_bounds2(x). Where the
+  /// bound equals its square, x lies inside the triangle's prism (no edge plane has it outside), and
+  /// for a triangle that bounds (not a sliver), that is then x's squared distance to it.
+  const double* plane_distances() const { return planes_.data(); }
 
  private:
   std::size_t m_ = 0;
   std::vector<double> rows_;
   std::vector<double> bounds_;  ///< the last point's bounds
+  std::vector<double> planes_;  ///< the last point's signed distances to the planes
 };
 
 }  // namespace lodkit::detail
