@@ -898,7 +898,7 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
 
 std::vector<HeapEntry> Engine::rate_all(const std::vector<std::pair<Index, Index>>& edges) {
   // (Their candidates are not kept: most are re-scored before they reach the top, and keeping them
-  // all cost a fifth more memory at the peak.)
+  // all raised hoppe's peak on the horse by 15 MiB, to 71.)
   rate_edges(main_, edges, false);
   std::vector<HeapEntry> entries;
   entries.reserve(edges.size());
