@@ -229,5 +229,51 @@ TEST(Geometry, BoundRowsGiveEachTrianglesBoundAndPlaneDistanceAndTheExactDistanc
   EXPECT_GT(walked, 1000);
 }
 
+TEST(Geometry, BoundRowsKernelsAgreeBitForBitWithEachOtherAndWithOneTriangleAtATime) {
+  // hoppe's scorer takes a point's home triangle alone (evaluate) and then asks which others have a
+  // bound below its distance (below): both must give exactly the bounds of the whole-row kernel, and
+  // the plain kernel exactly those of the AVX2 one, or the result would depend on the CPU.
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> coord(-1.0, 1.0);
+  auto random_point = [&] { return Eigen::Vector3d(coord(rng), coord(rng), coord(rng)); };
+  for (const std::size_t count : {std::size_t(1), std::size_t(7), std::size_t(13), std::size_t(64)}) {
+    detail::BoundRows rows;
+    rows.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      const Eigen::Vector3d c[3] = {random_point(), random_point(), random_point()};
+      detail::TrianglePlanes planes;
+      planes.set(c);
+      rows.set(i, planes);
+    }
+    for (int trial = 0; trial < 500; ++trial) {
+      const Eigen::Vector3d x = 1.5 * random_point();
+      const double limit = coord(rng) + 1.0;
+      std::vector<double> bounds[2], plane[2];
+      std::uint64_t below[2];
+      for (int plain = 0; plain < 2; ++plain) {
+        detail::BoundRows::use_vector_kernel(plain == 0);
+        below[plain] = rows.below(x, limit);
+        bounds[plain].assign(rows.bounds(), rows.bounds() + count);
+        plane[plain].assign(rows.plane_distances(), rows.plane_distances() + count);
+      }
+      detail::BoundRows::use_vector_kernel(true);
+      EXPECT_EQ(bounds[0], bounds[1]);
+      EXPECT_EQ(plane[0], plane[1]);
+      EXPECT_EQ(below[0], below[1]);
+      for (std::size_t i = 0; i < count; ++i) {
+        EXPECT_EQ((below[0] >> i) & 1, bounds[0][i] < limit ? 1u : 0u) << "triangle " << i;
+        double p, edge[3];
+        rows.evaluate(i, x, p, edge);
+        const double outside = std::max(std::max(edge[0], edge[1]), std::max(edge[2], 0.0));
+        EXPECT_EQ(p, plane[0][i]);
+        EXPECT_EQ(p * p + outside * outside, bounds[0][i]);
+      }
+      if (count < 64) {
+        EXPECT_EQ(below[0] >> count, 0u) << "no bits past the last triangle";
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace lodkit

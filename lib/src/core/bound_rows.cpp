@@ -2,40 +2,98 @@
 
 #include <algorithm>
 
-// The loop vectorises four-wide where the CPU has AVX2, chosen at load time.
 #if defined(__x86_64__) && defined(__GNUC__)
-#define LODKIT_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
-#else
-#define LODKIT_AVX2_CLONE
+#include <immintrin.h>
+#define LODKIT_HAVE_AVX2_KERNEL 1
 #endif
 
 namespace lodkit::detail {
 namespace {
 
-LODKIT_AVX2_CLONE void bounds_of_rows(const double* __restrict planes, std::size_t m, const Eigen::Vector3d& x,
-                                      double* __restrict out, double* __restrict out_plane) {
+// Both kernels evaluate each plane as ((a x + b y) + c z) - d with separate multiplies and adds (no
+// fused multiply-add), so they agree bit for bit with each other and with BoundRows::evaluate.
+void bounds_plain(const double* rows, std::size_t blocks, const Eigen::Vector3d& x, double* out, double* out_plane) {
   const double x0 = x[0], x1 = x[1], x2 = x[2];
-  auto row = [&](int r) { return planes + std::size_t(r) * m; };
-  const double *nx = row(0), *ny = row(1), *nz = row(2), *no = row(3);
-  const double *ax = row(4), *ay = row(5), *az = row(6), *ao = row(7);
-  const double *bx = row(8), *by = row(9), *bz = row(10), *bo = row(11);
-  const double *cx = row(12), *cy = row(13), *cz = row(14), *co = row(15);
-  for (std::size_t i = 0; i < m; ++i) {
-    const double plane = nx[i] * x0 + ny[i] * x1 + nz[i] * x2 - no[i];
-    const double a = ax[i] * x0 + ay[i] * x1 + az[i] * x2 - ao[i];
-    const double b = bx[i] * x0 + by[i] * x1 + bz[i] * x2 - bo[i];
-    const double c = cx[i] * x0 + cy[i] * x1 + cz[i] * x2 - co[i];
-    const double outside = std::max(std::max(a, b), std::max(c, 0.0));
-    out[i] = plane * plane + outside * outside;
-    out_plane[i] = plane;
+  for (std::size_t b = 0; b < blocks; ++b, rows += 64)
+    for (int l = 0; l < 4; ++l) {
+      auto plane = [&](int row) {
+        const double* r = rows + 4 * row + l;
+        return r[0] * x0 + r[4] * x1 + r[8] * x2 - r[12];
+      };
+      const double n = plane(0), outside = std::max(std::max(plane(4), plane(8)), std::max(plane(12), 0.0));
+      out[4 * b + l] = n * n + outside * outside;
+      out_plane[4 * b + l] = n;
+    }
+}
+
+#ifdef LODKIT_HAVE_AVX2_KERNEL
+// Four planes (rows r, r + 4, r + 8, r + 12 of a block) at x.
+__attribute__((target("avx2"))) inline __m256d planes_at(const double* r, __m256d x0, __m256d x1, __m256d x2) {
+  const __m256d s = _mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(r), x0), _mm256_mul_pd(_mm256_loadu_pd(r + 4), x1));
+  return _mm256_sub_pd(_mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(r + 8), x2)), _mm256_loadu_pd(r + 12));
+}
+
+__attribute__((target("avx2"))) void bounds_avx2(const double* rows, std::size_t blocks, const Eigen::Vector3d& x,
+                                                 double* out, double* out_plane) {
+  const __m256d x0 = _mm256_set1_pd(x[0]), x1 = _mm256_set1_pd(x[1]), x2 = _mm256_set1_pd(x[2]);
+  const __m256d zero = _mm256_setzero_pd();
+  for (std::size_t b = 0; b < blocks; ++b, rows += 64) {
+    const __m256d n = planes_at(rows, x0, x1, x2);
+    const __m256d outside = _mm256_max_pd(_mm256_max_pd(planes_at(rows + 16, x0, x1, x2), planes_at(rows + 32, x0, x1, x2)),
+                                          _mm256_max_pd(planes_at(rows + 48, x0, x1, x2), zero));
+    _mm256_storeu_pd(out + 4 * b, _mm256_add_pd(_mm256_mul_pd(n, n), _mm256_mul_pd(outside, outside)));
+    _mm256_storeu_pd(out_plane + 4 * b, n);
   }
 }
 
+__attribute__((target("avx2"))) std::uint64_t below_avx2(const double* bounds, std::size_t blocks, double limit) {
+  const __m256d l = _mm256_set1_pd(limit);
+  std::uint64_t mask = 0;
+  for (std::size_t b = 0; b < blocks; ++b)
+    mask |= std::uint64_t(_mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(bounds + 4 * b), l, _CMP_LT_OQ))) << (4 * b);
+  return mask;
+}
+
+bool has_avx2() {
+  __builtin_cpu_init();  // this may run before the constructors that would otherwise do it
+  return __builtin_cpu_supports("avx2");
+}
+bool use_avx2 = has_avx2();  // (only tests change it, with no scoring under way)
+#endif
+
 }  // namespace
 
+void BoundRows::use_vector_kernel(bool on) {
+#ifdef LODKIT_HAVE_AVX2_KERNEL
+  use_avx2 = on && has_avx2();
+#else
+  (void)on;
+#endif
+}
+
 const double* BoundRows::lower_bounds2(const Eigen::Vector3d& x) {
-  bounds_of_rows(rows_.data(), m_, x, bounds_.data(), planes_.data());
+#ifdef LODKIT_HAVE_AVX2_KERNEL
+  if (use_avx2) {
+    bounds_avx2(rows_.data(), blocks_, x, bounds_.data(), planes_.data());
+    return bounds_.data();
+  }
+#endif
+  bounds_plain(rows_.data(), blocks_, x, bounds_.data(), planes_.data());
   return bounds_.data();
+}
+
+std::uint64_t BoundRows::below(const Eigen::Vector3d& x, double limit) {
+  const double* bounds = lower_bounds2(x);
+  std::uint64_t mask = 0;
+#ifdef LODKIT_HAVE_AVX2_KERNEL
+  if (use_avx2) {
+    mask = below_avx2(bounds, blocks_, limit);
+  } else
+#endif
+  {
+    for (std::size_t i = 0; i < 4 * blocks_; ++i) mask |= std::uint64_t(bounds[i] < limit) << i;
+  }
+  return m_ >= 64 ? mask : mask & ((std::uint64_t(1) << m_) - 1);
 }
 
 }  // namespace lodkit::detail

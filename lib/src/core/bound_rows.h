@@ -1,49 +1,69 @@
 #pragma once
 // Lower bounds of a point's distance to many triangles at once (not public API).
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "core/geometry.h"
 
 namespace lodkit::detail {
 
-/// The planes of m triangles side by side (rows of m: normal x, y, z, offset, then each edge plane's
-/// x, y, z, offset), so that one point's bounds against all of them vectorise: four triangles per
-/// instruction where the CPU has AVX2, chosen at load time.
+/// The planes of m triangles in blocks of four (per block, 16 rows of four: normal x, y, z, offset,
+/// then each edge plane's x, y, z, offset), so that one point's bounds against all of them take one
+/// AVX2 instruction per row and block where the CPU has it (chosen at run time), with no scalar tail.
 class BoundRows {
  public:
   /// Room for m triangles; set each with set().
   void resize(std::size_t m) {
     m_ = m;
-    rows_.resize(16 * m);
-    bounds_.resize(m);
-    planes_.resize(m);
+    blocks_ = (m + 3) / 4;
+    rows_.resize(64 * blocks_);
+    bounds_.resize(4 * blocks_);
+    planes_.resize(4 * blocks_);
   }
   /// Triangle i's planes (a sliver's bound is 0, as TrianglePlanes::lower_bound2 has it).
   void set(std::size_t i, const TrianglePlanes& t) {
+    double* r = rows_.data() + 64 * (i / 4) + i % 4;
+    auto at = [&](int row) -> double& { return r[4 * row]; };
     if (!t.bounds) {
-      for (int r = 0; r < 16; ++r) rows_[r * m_ + i] = 0.0;
+      for (int row = 0; row < 16; ++row) at(row) = 0.0;
       return;
     }
     for (int c = 0; c < 3; ++c) {
-      rows_[c * m_ + i] = t.normal[c];
-      for (int e = 0; e < 3; ++e) rows_[(4 + 4 * e + c) * m_ + i] = t.edge_normal[e][c];
+      at(c) = t.normal[c];
+      for (int e = 0; e < 3; ++e) at(4 + 4 * e + c) = t.edge_normal[e][c];
     }
-    rows_[3 * m_ + i] = t.offset;
-    for (int e = 0; e < 3; ++e) rows_[(7 + 4 * e) * m_ + i] = t.edge_offset[e];
+    at(3) = t.offset;
+    for (int e = 0; e < 3; ++e) at(7 + 4 * e) = t.edge_offset[e];
   }
   /// For each triangle i, no more than the squared distance from x to it (see
   /// TrianglePlanes::lower_bound2); valid until the next call.
   const double* lower_bounds2(const Eigen::Vector3d& x);
+  /// lower_bounds2(x), and the triangles whose bound is below `limit`, as bits (triangle i: bit i).
+  /// For at most 64 triangles.
+  std::uint64_t below(const Eigen::Vector3d& x, double limit);
   /// For each triangle i, x's signed distance to its plane, from the last lower_bounds2(x). Where the
   /// bound equals its square, x lies inside the triangle's prism (no edge plane has it outside), and
   /// for a triangle that bounds (not a sliver), that is then x's squared distance to it.
   const double* plane_distances() const { return planes_.data(); }
+  /// Whether the AVX2 kernel is used where the CPU has it (default); off, the plain one, which must
+  /// give the same bits (tests switch it to check that).
+  static void use_vector_kernel(bool on);
+  /// The bounds of the last lower_bounds2(x) or below(x, limit).
+  const double* bounds() const { return bounds_.data(); }
+  /// Triangle i alone against x: its signed plane distance, and for each edge plane how far x lies
+  /// outside it (negative inside). The same arithmetic as lower_bounds2, so the same values bit for bit.
+  void evaluate(std::size_t i, const Eigen::Vector3d& x, double& plane, double edge[3]) const {
+    const double* r = rows_.data() + 64 * (i / 4) + i % 4;
+    auto at = [&](int row) { return r[4 * row]; };
+    plane = at(0) * x[0] + at(1) * x[1] + at(2) * x[2] - at(3);
+    for (int e = 0; e < 3; ++e) edge[e] = at(4 + 4 * e) * x[0] + at(5 + 4 * e) * x[1] + at(6 + 4 * e) * x[2] - at(7 + 4 * e);
+  }
 
  private:
-  std::size_t m_ = 0;
+  std::size_t m_ = 0, blocks_ = 0;
   std::vector<double> rows_;
-  std::vector<double> bounds_;  ///< the last point's bounds
+  std::vector<double> bounds_;  ///< the last point's bounds (padded to whole blocks)
   std::vector<double> planes_;  ///< the last point's signed distances to the planes
 };
 

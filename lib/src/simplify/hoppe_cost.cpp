@@ -11,6 +11,7 @@
 // along the boundary adds their squared distances to the edges around the merged vertex. Without that
 // term nothing holds a boundary vertex to the boundary: E_dist only pulls the mesh towards the input
 // points, so a boundary may drift over a hole (the bunny's base at 1 %: Hausdorff 2.8 %).
+#include <bit>
 #include <random>
 #include <unordered_map>
 #include <tbb/enumerable_thread_specific.h>
@@ -188,6 +189,7 @@ class HoppeScorer {
   // triangle a point's face becomes (its `home`) is nearly always the nearest, so it goes first and its
   // distance rules out nearly every other one through a cheap lower bound, computed for all triangles
   // at once. A point of a vanishing face has no home: the triangle with the lowest bound goes first.
+  // Either way the others follow in index order, triangle 0 taking the first's place.
   void project_all(const Eigen::Vector3d& p, bool solve) {
     const std::size_t m = tri_.size();
     rows_.resize(m);
@@ -195,14 +197,30 @@ class HoppeScorer {
     nearest_.resize(points_.size());
     for (std::size_t j = 0; j < points_.size(); ++j) {
       const Eigen::Vector3d& x = points_[j];
+      Nearest& out = nearest_[j];
+      if (const int home = home_[j]; home >= 0 && m <= 64) {
+        // Home from its own planes, then the bounds of all as bits: usually none is below home's distance.
+        double plane, edge[3];
+        rows_.evaluate(std::size_t(home), x, plane, edge);
+        const double outside = std::max(std::max(edge[0], edge[1]), std::max(edge[2], 0.0));
+        out = nearest_on(tri_[home], x, plane * plane + outside * outside, plane, p, solve);
+        std::uint64_t near = rows_.below(x, out.d2) & ~(std::uint64_t(1) << home);
+        if (!near) continue;
+        const double* bounds = rows_.bounds();
+        const double* planes = rows_.plane_distances();
+        near = (near & ~std::uint64_t(1)) | ((near & 1) << home);  // bit n: the n-th tried
+        for (; near; near &= near - 1) {
+          const int n = std::countr_zero(near);
+          const std::size_t k = n == home ? 0 : std::size_t(n);
+          if (bounds[k] >= out.d2) continue;
+          const Nearest c = nearest_on(tri_[k], x, bounds[k], planes[k], p, solve);
+          if (c.d2 < out.d2) out = c;
+        }
+        continue;
+      }
+      // No home (or a star too large for the bits): the same order, over every bound.
       const double* bounds = rows_.lower_bounds2(x);
       const double* planes = rows_.plane_distances();
-      auto nearest_on = [&](std::size_t k) {
-        return tri_[k].bounds && bounds[k] == planes[k] * planes[k] ? in_prism(x, tri_[k], planes[k], p, solve)
-                                                                    : on_triangle(x, tri_[k], p, solve);
-      };
-      // Home first (or the lowest bound when there is none), then the rest in index order, the first
-      // one taking the first's place.
       std::size_t first = 0;
       if (home_[j] >= 0) {
         first = std::size_t(home_[j]);
@@ -210,15 +228,20 @@ class HoppeScorer {
         for (std::size_t k = 1; k < m; ++k)
           if (bounds[k] < bounds[first]) first = k;
       }
-      Nearest& out = nearest_[j];
-      out = nearest_on(first);
+      out = nearest_on(tri_[first], x, bounds[first], planes[first], p, solve);
       for (std::size_t n = 1; n < m; ++n) {
         const std::size_t k = n == first ? 0 : n;
         if (bounds[k] >= out.d2) continue;
-        const Nearest c = nearest_on(k);
+        const Nearest c = nearest_on(tri_[k], x, bounds[k], planes[k], p, solve);
         if (c.d2 < out.d2) out = c;
       }
     }
+  }
+
+  // The nearest point to x on t, given x's bound and signed plane distance for t: where the bound is
+  // the plane distance squared, x is inside t's prism.
+  static Nearest nearest_on(const Tri& t, const Eigen::Vector3d& x, double bound, double plane, const Eigen::Vector3d& p, bool solve) {
+    return t.bounds && bound == plane * plane ? in_prism(x, t, plane, p, solve) : on_triangle(x, t, p, solve);
   }
 
   // The same for x inside t's prism, at signed distance `plane` from its plane: the nearest point is
@@ -262,6 +285,10 @@ class HoppeScorer {
     star_.clear();
     ring_u_.clear(), ring_v_.clear(), ring_.clear();
     faces_ = 0;
+    for (Index p : {u, v})
+      for (Index f : s.faces_of(p)) __builtin_prefetch(&face_samples_[f]), __builtin_prefetch(&s.face_point[f]);
+    for (Index p : {u, v})
+      for (Index f : s.faces_of(p)) __builtin_prefetch(face_samples_[f].data());
     for (Index p : {u, v})
       for (Index f : s.faces_of(p)) {
         bool has_u = false, has_v = false;
