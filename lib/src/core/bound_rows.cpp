@@ -1,6 +1,8 @@
 #include "core/bound_rows.h"
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -11,7 +13,7 @@ namespace lodkit::detail {
 namespace {
 
 // Both kernels evaluate each plane as ((a x + b y) + c z) - d with separate multiplies and adds (no
-// fused multiply-add), so they agree bit for bit with each other and with BoundRows::evaluate.
+// fused multiply-add), so they agree bit for bit.
 void bounds_plain(const double* rows, std::size_t blocks, const Eigen::Vector3d& x, double* out, double* out_plane) {
   const double x0 = x[0], x1 = x[1], x2 = x[2];
   for (std::size_t b = 0; b < blocks; ++b, rows += 64)
@@ -46,12 +48,25 @@ __attribute__((target("avx2"))) void bounds_avx2(const double* rows, std::size_t
   }
 }
 
-__attribute__((target("avx2"))) std::uint64_t below_avx2(const double* bounds, std::size_t blocks, double limit) {
-  const __m256d l = _mm256_set1_pd(limit);
+// Bit i: bounds[i] compared with `value` holds (kCompare: _CMP_LT_OQ or _CMP_EQ_OQ).
+template <int kCompare>
+__attribute__((target("avx2"))) std::uint64_t compare_avx2(const double* bounds, std::size_t blocks, double value) {
+  const __m256d l = _mm256_set1_pd(value);
   std::uint64_t mask = 0;
   for (std::size_t b = 0; b < blocks; ++b)
-    mask |= std::uint64_t(_mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(bounds + 4 * b), l, _CMP_LT_OQ))) << (4 * b);
+    mask |= std::uint64_t(_mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(bounds + 4 * b), l, kCompare))) << (4 * b);
   return mask;
+}
+
+// The least of bounds[0, m), the padding of the last block left out.
+__attribute__((target("avx2"))) double least_avx2(const double* bounds, std::size_t m) {
+  const std::size_t whole = m / 4;
+  __m256d least = _mm256_set1_pd(INFINITY);
+  for (std::size_t b = 0; b < whole; ++b) least = _mm256_min_pd(least, _mm256_loadu_pd(bounds + 4 * b));
+  const __m128d half = _mm_min_pd(_mm256_castpd256_pd128(least), _mm256_extractf128_pd(least, 1));
+  double out = _mm_cvtsd_f64(_mm_min_sd(half, _mm_unpackhi_pd(half, half)));
+  for (std::size_t i = 4 * whole; i < m; ++i) out = std::min(out, bounds[i]);
+  return out;
 }
 
 bool has_avx2() {
@@ -82,18 +97,31 @@ const double* BoundRows::lower_bounds2(const Eigen::Vector3d& x) {
   return bounds_.data();
 }
 
-std::uint64_t BoundRows::below(const Eigen::Vector3d& x, double limit) {
-  const double* bounds = lower_bounds2(x);
+std::uint64_t BoundRows::below(double limit) const {
   std::uint64_t mask = 0;
 #ifdef LODKIT_HAVE_AVX2_KERNEL
   if (use_avx2) {
-    mask = below_avx2(bounds, blocks_, limit);
+    mask = compare_avx2<_CMP_LT_OQ>(bounds_.data(), blocks_, limit);
   } else
 #endif
   {
-    for (std::size_t i = 0; i < 4 * blocks_; ++i) mask |= std::uint64_t(bounds[i] < limit) << i;
+    for (std::size_t i = 0; i < 4 * blocks_; ++i) mask |= std::uint64_t(bounds_[i] < limit) << i;
   }
   return m_ >= 64 ? mask : mask & ((std::uint64_t(1) << m_) - 1);
+}
+
+std::size_t BoundRows::lowest() const {
+#ifdef LODKIT_HAVE_AVX2_KERNEL
+  if (use_avx2 && m_ <= 64) {
+    // The least value, then the first triangle that has it: the same as a scan keeping the first.
+    const std::uint64_t at = compare_avx2<_CMP_EQ_OQ>(bounds_.data(), blocks_, least_avx2(bounds_.data(), m_));
+    if (at) return std::size_t(std::countr_zero(at));  // (none only for NaN bounds)
+  }
+#endif
+  std::size_t first = 0;
+  for (std::size_t k = 1; k < m_; ++k)
+    if (bounds_[k] < bounds_[first]) first = k;
+  return first;
 }
 
 }  // namespace lodkit::detail

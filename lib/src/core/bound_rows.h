@@ -39,9 +39,11 @@ class BoundRows {
   /// For each triangle i, no more than the squared distance from x to it (see
   /// TrianglePlanes::lower_bound2); valid until the next call.
   const double* lower_bounds2(const Eigen::Vector3d& x);
-  /// lower_bounds2(x), and the triangles whose bound is below `limit`, as bits (triangle i: bit i).
-  /// For at most 64 triangles.
-  std::uint64_t below(const Eigen::Vector3d& x, double limit);
+  /// The triangles whose bound from the last lower_bounds2(x) is below `limit`, as bits (triangle i:
+  /// bit i). For at most 64 triangles.
+  std::uint64_t below(double limit) const;
+  /// The first triangle with the least bound from the last lower_bounds2(x) (at least one triangle).
+  std::size_t lowest() const;
   /// For each triangle i, x's signed distance to its plane, from the last lower_bounds2(x). Where the
   /// bound equals its square, x lies inside the triangle's prism (no edge plane has it outside), and
   /// for a triangle that bounds (not a sliver), that is then x's squared distance to it.
@@ -49,16 +51,8 @@ class BoundRows {
   /// Whether the AVX2 kernel is used where the CPU has it (default); off, the plain one, which must
   /// give the same bits (tests switch it to check that).
   static void use_vector_kernel(bool on);
-  /// The bounds of the last lower_bounds2(x) or below(x, limit).
+  /// The bounds of the last lower_bounds2(x).
   const double* bounds() const { return bounds_.data(); }
-  /// Triangle i alone against x: its signed plane distance, and for each edge plane how far x lies
-  /// outside it (negative inside). The same arithmetic as lower_bounds2, so the same values bit for bit.
-  void evaluate(std::size_t i, const Eigen::Vector3d& x, double& plane, double edge[3]) const {
-    const double* r = rows_.data() + 64 * (i / 4) + i % 4;
-    auto at = [&](int row) { return r[4 * row]; };
-    plane = at(0) * x[0] + at(1) * x[1] + at(2) * x[2] - at(3);
-    for (int e = 0; e < 3; ++e) edge[e] = at(4 + 4 * e) * x[0] + at(5 + 4 * e) * x[1] + at(6 + 4 * e) * x[2] - at(7 + 4 * e);
-  }
 
  private:
   std::size_t m_ = 0, blocks_ = 0;

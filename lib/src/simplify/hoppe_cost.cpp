@@ -189,7 +189,7 @@ class HoppeScorer {
   // triangle a point's face becomes (its `home`) is nearly always the nearest, so it goes first and its
   // distance rules out nearly every other one through a cheap lower bound, computed for all triangles
   // at once. A point of a vanishing face has no home: the triangle with the lowest bound goes first.
-  // Either way the others follow in index order, triangle 0 taking the first's place.
+  // The others left follow in index order, triangle 0 taking the first's place.
   void project_all(const Eigen::Vector3d& p, bool solve) {
     const std::size_t m = tri_.size();
     rows_.resize(m);
@@ -197,43 +197,25 @@ class HoppeScorer {
     nearest_.resize(points_.size());
     for (std::size_t j = 0; j < points_.size(); ++j) {
       const Eigen::Vector3d& x = points_[j];
-      Nearest& out = nearest_[j];
-      if (const int home = home_[j]; home >= 0 && m <= 64) {
-        // Home from its own planes, then the bounds of all as bits: usually none is below home's distance.
-        double plane, edge[3];
-        rows_.evaluate(std::size_t(home), x, plane, edge);
-        const double outside = std::max(std::max(edge[0], edge[1]), std::max(edge[2], 0.0));
-        out = nearest_on(tri_[home], x, plane * plane + outside * outside, plane, p, solve);
-        std::uint64_t near = rows_.below(x, out.d2) & ~(std::uint64_t(1) << home);
-        if (!near) continue;
-        const double* bounds = rows_.bounds();
-        const double* planes = rows_.plane_distances();
-        near = (near & ~std::uint64_t(1)) | ((near & 1) << home);  // bit n: the n-th tried
-        for (; near; near &= near - 1) {
-          const int n = std::countr_zero(near);
-          const std::size_t k = n == home ? 0 : std::size_t(n);
-          if (bounds[k] >= out.d2) continue;
-          const Nearest c = nearest_on(tri_[k], x, bounds[k], planes[k], p, solve);
-          if (c.d2 < out.d2) out = c;
-        }
-        continue;
-      }
-      // No home (or a star too large for the bits): the same order, over every bound.
       const double* bounds = rows_.lower_bounds2(x);
       const double* planes = rows_.plane_distances();
-      std::size_t first = 0;
-      if (home_[j] >= 0) {
-        first = std::size_t(home_[j]);
-      } else {
-        for (std::size_t k = 1; k < m; ++k)
-          if (bounds[k] < bounds[first]) first = k;
-      }
+      const std::size_t first = home_[j] >= 0 ? std::size_t(home_[j]) : rows_.lowest();
+      Nearest& out = nearest_[j];
       out = nearest_on(tri_[first], x, bounds[first], planes[first], p, solve);
-      for (std::size_t n = 1; n < m; ++n) {
-        const std::size_t k = n == first ? 0 : n;
-        if (bounds[k] >= out.d2) continue;
+      auto try_triangle = [&](std::size_t k) {
+        if (bounds[k] >= out.d2) return;
         const Nearest c = nearest_on(tri_[k], x, bounds[k], planes[k], p, solve);
         if (c.d2 < out.d2) out = c;
+      };
+      if (m <= 64) {
+        // The bounds below the first's distance as bits (usually none), bit n for the n-th tried.
+        std::uint64_t near = rows_.below(out.d2) & ~(std::uint64_t(1) << first);
+        for (near = (near & ~std::uint64_t(1)) | ((near & 1) << first); near; near &= near - 1) {
+          const std::size_t n = std::size_t(std::countr_zero(near));
+          try_triangle(n == first ? 0 : n);
+        }
+      } else {
+        for (std::size_t n = 1; n < m; ++n) try_triangle(n == first ? 0 : n);
       }
     }
   }
