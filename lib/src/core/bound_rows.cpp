@@ -99,13 +99,14 @@ const double* BoundRows::lower_bounds2(const Eigen::Vector3d& x) {
 
 std::uint64_t BoundRows::below(double limit) const {
   std::uint64_t mask = 0;
+  const std::size_t blocks = std::min<std::size_t>(blocks_, 16);  // (bits for the first 64 only)
 #ifdef LODKIT_HAVE_AVX2_KERNEL
   if (use_avx2) {
-    mask = compare_avx2<_CMP_LT_OQ>(bounds_.data(), blocks_, limit);
+    mask = compare_avx2<_CMP_LT_OQ>(bounds_.data(), blocks, limit);
   } else
 #endif
   {
-    for (std::size_t i = 0; i < 4 * blocks_; ++i) mask |= std::uint64_t(bounds_[i] < limit) << i;
+    for (std::size_t i = 0; i < 4 * blocks; ++i) mask |= std::uint64_t(bounds_[i] < limit) << i;
   }
   return m_ >= 64 ? mask : mask & ((std::uint64_t(1) << m_) - 1);
 }

@@ -269,6 +269,8 @@ class HoppeScorer {
     star_.clear();
     ring_u_.clear(), ring_v_.clear(), ring_.clear();
     faces_ = 0;
+    // Each face's points are an array of their own: ask for every header, then every array, rather
+    // than wait on one cache miss after another.
     for (Index p : {u, v})
       for (Index f : s.faces_of(p)) __builtin_prefetch(&face_samples_[f]), __builtin_prefetch(&s.face_point[f]);
     for (Index p : {u, v})
