@@ -8,6 +8,13 @@
 
 namespace lodkit::detail {
 
+/// Where the nearest point to x on segment a b lies, as t in [0, 1] along it (0 for a point-like segment).
+inline double segment_parameter(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d d = b - a;
+  const double len2 = d.squaredNorm();
+  return len2 > 0 ? std::clamp((x - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+}
+
 /// Closest point to `p` on triangle (a, b, c); robust for degenerate triangles (Ericson, RTCD 5.1.5).
 inline Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                                                  const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
@@ -31,10 +38,7 @@ inline Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const
   const double sum = va + vb + vc;
   if (!(sum > 0)) {  // degenerate (collinear) triangle: fall back to the closest of its edges
     auto on_segment = [&](const Eigen::Vector3d& s, const Eigen::Vector3d& e) {
-      const Eigen::Vector3d d = e - s;
-      const double len2 = d.squaredNorm();
-      const double t = len2 > 0 ? std::clamp((p - s).dot(d) / len2, 0.0, 1.0) : 0.0;
-      return Eigen::Vector3d(s + t * d);
+      return Eigen::Vector3d(s + segment_parameter(p, s, e) * (e - s));
     };
     Eigen::Vector3d best = on_segment(a, b);
     for (const Eigen::Vector3d& q : {on_segment(b, c), on_segment(c, a)})

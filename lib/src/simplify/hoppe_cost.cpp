@@ -62,10 +62,8 @@ void boundary_neighbours(const EngineState& s, Index p, std::vector<Index>& out)
 
 /// Where x meets segment p w: the squared distance and the weight 1 - t of p in the nearest point.
 inline std::pair<double, double> on_segment(const Eigen::Vector3d& x, const Eigen::Vector3d& p, const Eigen::Vector3d& w) {
-  const Eigen::Vector3d d = w - p;
-  const double len2 = d.squaredNorm();
-  const double t = len2 > 0 ? std::clamp((x - p).dot(d) / len2, 0.0, 1.0) : 0.0;
-  return {(p + t * d - x).squaredNorm(), 1.0 - t};
+  const double t = segment_parameter(x, p, w);
+  return {(p + t * (w - p) - x).squaredNorm(), 1.0 - t};
 }
 
 // Scores candidates against the shared sample points. Each thread that scores has its own scorer:
@@ -96,8 +94,7 @@ class HoppeScorer {
     for (std::size_t j = 0; j < points_.size(); ++j) before += weight_[j] * dist2_[j];
     for (Index c : curve_points_) before += curves_.dist2[c];
     for (Index w : ring_u_) before += kappa * (s.position[u] - s.position[w]).squaredNorm();
-    for (Index w : ring_v_)
-      if (w != u) before += kappa * (s.position[v] - s.position[w]).squaredNorm();
+    for (Index w : ring_v_) before += kappa * (s.position[v] - s.position[w]).squaredNorm();  // (u is not in it)
 
     double worst = 0;  // largest squared point distance at the last evaluated position
     // With the projections held fixed, E at another position q is sum w |x - b q - f|^2 + springs: an
