@@ -101,7 +101,8 @@ class HoppeScorer {
     // upper bound of the true E(q), since re-projecting can only bring points closer. So one projection
     // pass gives both the solve and a safe energy for the solved position.
     double solved_energy = 0, solved_worst = 0;
-    auto energy = [&](const Eigen::Vector3d& p, bool solve, Eigen::Vector3d* improved) {
+    Eigen::Vector3d solved;
+    auto energy = [&](const Eigen::Vector3d& p, bool solve) {
       // Project every point onto the new star; optionally solve for the position given the projections.
       double e = 0, sum_b2 = 0;
       worst = 0;
@@ -150,15 +151,15 @@ class HoppeScorer {
         e += kappa * (p - s.position[w]).squaredNorm();
         if (solve) rhs += kappa * s.position[w], sum_b2 += kappa;
       }
-      if (solve && improved) {
-        *improved = sum_b2 > 0 ? Eigen::Vector3d(rhs / sum_b2) : p;
+      if (solve) {
+        solved = sum_b2 > 0 ? Eigen::Vector3d(rhs / sum_b2) : p;
         solved_energy = 0, solved_worst = 0;
         for (const Projection& pr : projections_) {
-          const double d = (pr.x - pr.b * *improved - pr.fixed).squaredNorm();
+          const double d = (pr.x - pr.b * solved - pr.fixed).squaredNorm();
           solved_energy += pr.weight * d;
           solved_worst = std::max(solved_worst, d);
         }
-        for (Index w : ring_) solved_energy += kappa * (*improved - s.position[w]).squaredNorm();
+        for (Index w : ring_) solved_energy += kappa * (solved - s.position[w]).squaredNorm();
       }
       return e;
     };
@@ -166,7 +167,6 @@ class HoppeScorer {
     // Start where the quadric puts the vertex (cheap, and close to the energy's optimum), project the
     // points once while setting up the least-squares solve, then evaluate the solved position.
     Eigen::Vector3d p = s.position[v];
-    Eigen::Vector3d next;
     double e = 0, e_worst = 0;
     {
       if (freedom == Freedom::Free) {
@@ -175,8 +175,8 @@ class HoppeScorer {
         Eigen::Vector3d best;
         p = q.truncated_minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (s.position[u] - s.position[v]).norm() ? best : mid;
       }
-      e = energy(p, freedom == Freedom::Free, &next), e_worst = worst;
-      if (freedom == Freedom::Free && solved_energy < e) e = solved_energy, p = next, e_worst = solved_worst;
+      e = energy(p, freedom == Freedom::Free), e_worst = worst;
+      if (freedom == Freedom::Free && solved_energy < e) e = solved_energy, p = solved, e_worst = solved_worst;
     }
     out.position = p;
     out.cost = e - before;
