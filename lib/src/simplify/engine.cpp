@@ -151,6 +151,15 @@ class Engine {
     __builtin_prefetch(&s_.position[p]);
     __builtin_prefetch(s_.point_faces[p].data());
   }
+  // The next two levels of what checking a collapse at p reads: its faces once p's face list is in
+  // cache, then their corners' positions once the faces are.
+  void prefetch_faces(Index p) const {
+    for (Index f : s_.faces_of(p)) __builtin_prefetch(&s_.face_point[f]), __builtin_prefetch(&s_.face_normal0[f]);
+  }
+  void prefetch_corners(Index p) const {
+    for (Index f : s_.faces_of(p))
+      for (int k = 0; k < 3; ++k) __builtin_prefetch(&s_.position[s_.corner_point(f, k)]);
+  }
   void neighbours(Index p, std::vector<Index>& out);
   /// Wedge w's attributes as the output has them (optimised values unscaled, normals unit length,
   /// colours clamped to float), in the layout of attribute_values_per_vertex().
@@ -783,7 +792,11 @@ void Engine::drain(Lane& lane, Done done, std::optional<std::pair<Index, Index>>
       continue;
     }
     const bool scored = recall(e, c);
-    if (evaluate(lane, e.u, e.v, c, true, scored) != Rejection::None) {
+    const Rejection verdict = evaluate(lane, e.u, e.v, c, true, scored);
+    // The next pop's data arrives in three steps, each while a collapse is checked or done: checking
+    // one waited on memory for a third of its time (igea, lanes: 1.40 -> 1.02 G cycles).
+    if (!queue.empty()) prefetch_faces(queue.top().u), prefetch_faces(queue.top().v);
+    if (verdict != Rejection::None) {
       // The best direction is illegal now; the other one may still be worth queueing.
       Candidate r;
       if (evaluate(lane, e.v, e.u, r, true) == Rejection::None) {
@@ -798,6 +811,7 @@ void Engine::drain(Lane& lane, Done done, std::optional<std::pair<Index, Index>>
       break;
     }
     collapse(lane, e.u, e.v, c);
+    if (!queue.empty()) prefetch_corners(queue.top().u), prefetch_corners(queue.top().v);
     if (lane.region < 0) report_progress(s_.alive_faces);
   }
 }
