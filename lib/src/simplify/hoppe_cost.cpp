@@ -451,37 +451,29 @@ class HoppeCost final : public CostModel {
     // exceeds that distance cannot be nearer (the margin covers the bounds' rounding), so only the few
     // others left are measured, in order.
     rows_.resize(around.size());
-    prism_.resize(around.size());
     for (std::size_t i = 0; i < around.size(); ++i) {
       const Eigen::Vector3d c[3] = {s.position[s.corner_point(around[i], 0)], s.position[s.corner_point(around[i], 1)],
                                     s.position[s.corner_point(around[i], 2)]};
       TrianglePlanes planes;
       planes.set(c);
       rows_.set(i, planes);
-      prism_[i] = planes.bounds;
     }
+    auto distance2 = [&](const Eigen::Vector3d& x, Index f) {
+      const Eigen::Vector3d q = closest_point_on_triangle(x, s.position[s.corner_point(f, 0)], s.position[s.corner_point(f, 1)],
+                                                          s.position[s.corner_point(f, 2)]);
+      return (q - x).squaredNorm();
+    };
     for (std::size_t j = 0; j < moving_.size(); ++j) {
       Sample& sample = moving_[j];
-      const Eigen::Vector3d& x = sample.x;
-      const double* bounds = rows_.lower_bounds2(x);
-      const double* planes = rows_.plane_distances();
-      // Inside a face's prism (not a sliver's) the nearest point is x's foot on its plane: measured as
-      // the scorer measures it, so a point's distance is the same number in both.
-      auto distance2 = [&](std::size_t k) {
-        if (prism_[k] && bounds[k] == planes[k] * planes[k]) return planes[k] * planes[k];
-        const Index f = around[k];
-        const Eigen::Vector3d q = closest_point_on_triangle(x, s.position[s.corner_point(f, 0)], s.position[s.corner_point(f, 1)],
-                                                            s.position[s.corner_point(f, 2)]);
-        return (q - x).squaredNorm();
-      };
       const std::size_t home = home_[j];
-      const double reach = home != none ? distance2(home) : INFINITY;
+      const double reach = home != none ? distance2(sample.x, around[home]) : INFINITY;
       const double limit = std::isfinite(reach) ? (std::sqrt(reach) + margin_) * (std::sqrt(reach) + margin_) : INFINITY;
       double best = INFINITY;
       Index best_face = -1;
+      const double* bounds = rows_.lower_bounds2(sample.x);
       for (std::size_t k = 0; k < around.size(); ++k) {
         if (k != home && bounds[k] > limit) continue;
-        const double d = k == home ? reach : distance2(k);
+        const double d = k == home ? reach : distance2(sample.x, around[k]);
         if (d < best) best = d, best_face = around[k];
       }
       sample.dist2 = best;
@@ -524,7 +516,6 @@ class HoppeCost final : public CostModel {
   std::vector<Sample> moving_;
   std::vector<std::size_t> home_;  ///< per point of moving_: its face's index in faces_of(v)
   BoundRows rows_;
-  std::vector<char> prism_;  ///< per face of faces_of(v): its planes bound (not a sliver)
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
   BoundaryCurves curves_;
   tbb::enumerable_thread_specific<HoppeScorer> scorers_{
