@@ -55,6 +55,7 @@ inline Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const
 struct TrianglePlanes {
   Eigen::Vector3d normal, edge_normal[3];
   double offset, edge_offset[3];
+  double twice_area = 0;  ///< |(c1 - c0) x (c2 - c0)|
   /// False for a sliver (its angle at c0 under ~1e-4 rad): its normal is too uncertain for the margin,
   /// so the bound is 0 (here and in BoundRows, the same bound vectorised).
   bool bounds = true;
@@ -67,6 +68,7 @@ struct TrianglePlanes {
     // n's rounding error, relative, is about 1e-16 / sin(angle at c0).
     bounds = area2 > 1e-8 * e1.squaredNorm() * e2.squaredNorm();
     const double len = std::sqrt(area2);
+    twice_area = len;
     normal = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
     offset = normal.dot(c[0]);
     for (int k = 0; k < 3; ++k) {

@@ -72,7 +72,6 @@ class HoppeScorer {
   // A triangle of the new star, with its planes.
   struct Tri : TrianglePlanes {
     Eigen::Vector3d c[3];
-    double length;  ///< |(c1 - c0) x (c2 - c0)|, twice the area
     int moving;
     double opposite;  ///< the length of the side opposite the moving corner
   };
@@ -106,7 +105,7 @@ class HoppeScorer {
       // Project every point onto the new star; optionally solve for the position given the projections.
       double e = 0, sum_b2 = 0;
       worst = 0;
-      projections_.clear();
+      curve_projections_.clear();
       Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
       // The star's triangles, with the planes that bound the distance to each from below.
       tri_.clear();
@@ -114,7 +113,7 @@ class HoppeScorer {
         Tri tri;
         for (int k = 0; k < 3; ++k) tri.c[k] = t[k] < 0 ? p : s.position[t[k]];
         tri.moving = t[0] < 0 ? 0 : t[1] < 0 ? 1 : 2;
-        tri.length = std::sqrt(tri.set(tri.c));
+        tri.set(tri.c);
         tri.opposite = (tri.c[(tri.moving + 2) % 3] - tri.c[(tri.moving + 1) % 3]).norm();
         tri_.push_back(tri);
       }
@@ -128,7 +127,6 @@ class HoppeScorer {
         if (solve) {
           sum_b2 += weight * n.b * n.b;
           rhs += weight * n.b * (points_[j] - n.fixed);
-          projections_.push_back({points_[j], weight, n.b, n.fixed});
         }
       }
       for (Index c : curve_points_) {
@@ -144,7 +142,7 @@ class HoppeScorer {
           const Eigen::Vector3d fixed = (1 - b) * s.position[end];
           sum_b2 += b * b;
           rhs += b * (x - fixed);
-          projections_.push_back({x, 1.0, b, fixed});
+          curve_projections_.push_back({x, 1.0, b, fixed});
         }
       }
       for (Index w : ring_) {
@@ -154,7 +152,14 @@ class HoppeScorer {
       if (solve) {
         solved = sum_b2 > 0 ? Eigen::Vector3d(rhs / sum_b2) : p;
         solved_energy = 0, solved_worst = 0;
-        for (const Projection& pr : projections_) {
+        // The surface points' projections are read where they are (nearest_), then the boundary's.
+        for (std::size_t j = 0; j < points_.size(); ++j) {
+          const Nearest& n = nearest_[j];
+          const double d = (points_[j] - n.b * solved - n.fixed).squaredNorm();
+          solved_energy += weight_[j] * d;
+          solved_worst = std::max(solved_worst, d);
+        }
+        for (const Projection& pr : curve_projections_) {
           const double d = (pr.x - pr.b * solved - pr.fixed).squaredNorm();
           solved_energy += pr.weight * d;
           solved_worst = std::max(solved_worst, d);
@@ -234,7 +239,7 @@ class HoppeScorer {
       const Eigen::Vector3d q = x - plane * t.normal;
       const int o = (t.moving + 1) % 3;  // the side from corner moving + 1 to moving + 2
       const double inside = t.edge_offset[o] - t.edge_normal[o].dot(x);
-      out.b = std::clamp(inside * t.opposite / t.length, 0.0, 1.0);
+      out.b = std::clamp(inside * t.opposite / t.twice_area, 0.0, 1.0);
       out.fixed = q - out.b * p;
     }
     return out;
@@ -248,7 +253,7 @@ class HoppeScorer {
     if (solve) {
       const int m = t.moving;
       const Eigen::Vector3d e1 = t.c[(m + 1) % 3] - q, e2 = t.c[(m + 2) % 3] - q;
-      out.b = t.length > 0 ? std::clamp(e1.cross(e2).dot(t.normal) / t.length, 0.0, 1.0) : 0.0;
+      out.b = t.twice_area > 0 ? std::clamp(e1.cross(e2).dot(t.normal) / t.twice_area, 0.0, 1.0) : 0.0;
       out.fixed = q - out.b * p;
     }
     return out;
@@ -359,12 +364,13 @@ class HoppeScorer {
   std::vector<Tri> tri_;
   std::vector<Nearest> nearest_;  ///< per point of points_: its projection onto the new star
   BoundRows rows_;  ///< the star's planes
+  // A boundary point's projection (the surface points' are read from nearest_).
   struct Projection {
     Eigen::Vector3d x;  // the sample point
     double weight, b;
     Eigen::Vector3d fixed;
   };
-  std::vector<Projection> projections_;
+  std::vector<Projection> curve_projections_;
   Index faces_ = 0;
 };
 
