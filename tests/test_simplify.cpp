@@ -279,6 +279,42 @@ TEST(Simplify, DirtyInputSimplifiesWithoutCrashing) {
   }
 }
 
+TEST(Simplify, TriangleSoupKeepsEveryTriangleAndSaysWhy) {
+  // Separate triangles (a soup): every edge is a boundary edge, and collapsing one would delete its
+  // whole triangle. hoppe has no surface left to measure its points against there; it crashed on such
+  // a candidate (trimesh_soup.ply) before the link condition could refuse it.
+  Mesh m;
+  const Index n = 40;
+  m.positions.resize(3 * n, 3);
+  m.triangles.resize(n, 3);
+  for (Index i = 0; i < n; ++i) {
+    const double x = 2.0 * i, z = 0.1 * (i % 3);
+    m.positions.row(3 * i) << x, 0, z;
+    m.positions.row(3 * i + 1) << x + 1, 0.1 * (i % 5), 0;
+    m.positions.row(3 * i + 2) << x, 1, -z;
+    m.triangles.row(i) << 3 * i, 3 * i + 1, 3 * i + 2;
+  }
+  for (SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe, SimplifyMethod::EdgeLength}) {
+    for (bool topology : {true, false}) {
+      SCOPED_TRACE(to_string(method) + (topology ? " preserving topology" : " without checks"));
+      SimplifyOptions o;
+      o.method = method;
+      o.target_ratio = 0.1;
+      o.preserve_topology = topology;
+      const SimplifyResult r = simplify(m, o);
+      validate(r.mesh);
+      if (topology || method == SimplifyMethod::Hoppe) {
+        // Nothing can go without taking a component with it: every triangle stays, and the report
+        // says the target was not reached and why.
+        EXPECT_EQ(r.faces_out, n);
+        EXPECT_EQ(r.mesh.positions, m.positions);
+        EXPECT_NE(r.reason, StopReason::TargetReached);
+        EXPECT_NE(r.reason_text.find("none of the"), std::string::npos) << r.reason_text;
+      }
+    }
+  }
+}
+
 TEST(Simplify, RecordsEveryCollapse) {
   const Mesh m = test::bumpy_sphere(3, 0.01);
   SimplifyOptions o;

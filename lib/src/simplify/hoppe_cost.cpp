@@ -86,6 +86,10 @@ class HoppeScorer {
 
   bool score(const EngineState& s, Index u, Index v, Freedom freedom, bool border_edge, Candidate& out) {
     gather(s, u, v);
+    // A collapse that removes every face around u and v (an isolated triangle) leaves the points no
+    // surface to belong to: E is undefined there, so it is no candidate (the link condition refuses it
+    // too, but only when it reaches the top of the queue).
+    if (star_.empty()) return false;
     gather_curves(s, u, v, border_edge);
     // Spring energy before: the edges at u and at v (the rest of the neighbourhood does not change).
     const double kappa = spring_constant();
