@@ -66,6 +66,31 @@ TEST(BadInput, EveryTruncationOfAGoodFileIsHandled) {
   }
 }
 
+TEST(BadInput, DracoRefusesValuesBeyondItsFloatsInsteadOfCrashing) {
+  // A box as wide as 32-bit floats go (../shared's manifold_Cray_right.obj): quantising it overflowed
+  // the extent Draco computes in float, and its encoder crashed.
+  Mesh m = test::single_triangle();
+  m.positions(0, 0) = -3.4028234e38;
+  m.positions(1, 0) = 3.4028234e38;
+  auto message = [](const Mesh& mesh, const WriteOptions& w) -> std::string {
+    try {
+      write_mesh_to_memory(mesh, MeshFormat::Draco, w);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  WriteOptions w;  // 14-bit positions
+  EXPECT_NE(message(m, w).find("0 quantisation bits"), std::string::npos) << message(m, w);
+  // Unquantised, Draco keeps the floats as they are.
+  w.draco.position_bits = 0;
+  const Mesh back = read_mesh_from_memory(write_mesh_to_memory(m, MeshFormat::Draco, w), MeshFormat::Draco, "x.drc");
+  EXPECT_EQ(back.positions, m.positions.cast<float>().cast<double>());
+  // Beyond the largest float there is nothing to store, quantised or not.
+  m.positions(2, 1) = 1e39;
+  EXPECT_NE(message(m, w).find("vertex 2's y"), std::string::npos) << message(m, w);
+}
+
 TEST(AtomicWrite, FailedWriteLeavesNothingAndKeepsTheOldFile) {
   test::ScratchDir dir("atomic");
   const auto target = dir / "out.drc";

@@ -129,6 +129,26 @@ TEST(PmStream, DracoBaseDecodesToTheSameLevels) {
   EXPECT_THROW(write_pm_to_memory(pm, wo), Error);
 }
 
+TEST(PmStream, DracoBaseFallsBackWhereDracoCannotQuantise) {
+  // A box as wide as 32-bit floats go: Draco's encoder overflowed the extent and crashed on its base.
+  // The stream keeps its own quantised base instead.
+  Mesh box = make_box();  // the unit cube around the origin
+  box.positions.col(0) *= 6.8e38;
+  box.positions.col(1) *= 6.8e38;
+  ProgressiveOptions po;
+  po.base_faces = box.num_faces();
+  const ProgressiveMesh pm = build_progressive_mesh(box, po);
+  PmWriteOptions wo;
+  wo.position_bits = 14;
+  wo.draco_base = true;
+  const PmReadResult r = read_pm_from_memory(write_pm_to_memory(pm, wo), "mem.pm");
+  ASSERT_TRUE(r.complete);
+  const Mesh back = extract_level(r.pm, r.pm.max_level()).mesh;
+  ASSERT_EQ(back.num_faces(), box.num_faces());
+  const double step = 6.8e38 / ((1 << 14) - 1);  // the longest side over the grid
+  EXPECT_LE(compare(box, back).hausdorff, step);
+}
+
 TEST(PmStream, PrefixReadStopsAtTheFaceBudget) {
   const Mesh input = test::bumpy_sphere(3, 0.05);
   const ProgressiveMesh pm = build_progressive_mesh(input);

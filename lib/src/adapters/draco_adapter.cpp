@@ -2,6 +2,9 @@
 
 #include <lodkit/error.h>
 
+#include <cmath>
+#include <fmt/format.h>
+
 #include <draco/attributes/geometry_attribute.h>
 #include <draco/attributes/point_attribute.h>
 
@@ -26,7 +29,37 @@ int add_attribute(draco::Mesh& dm, draco::GeometryAttribute::Type type, draco::D
   return id;
 }
 
+// The first problem with the columns of `values` (named by `axes`) as Draco floats; see
+// draco_range_problem.
+template <typename Matrix>
+std::string float_range_problem(const Matrix& values, const char* what, const char* axes, bool quantised) {
+  for (Index c = 0; c < values.cols(); ++c) {
+    float lo = INFINITY, hi = -INFINITY;
+    for (Index v = 0; v < values.rows(); ++v) {
+      const float x = static_cast<float>(values(v, c));
+      if (!std::isfinite(x))
+        return fmt::format("vertex {}'s {} {} ({}) is beyond the 32-bit floats Draco stores", v, axes[c], what,
+                           static_cast<double>(values(v, c)));
+      lo = std::min(lo, x), hi = std::max(hi, x);
+    }
+    if (quantised && values.rows() > 0 && !std::isfinite(hi - lo))
+      return fmt::format("its {} span {} .. {} in {}, an extent beyond the 32-bit floats Draco quantises with; "
+                         "write them with 0 quantisation bits",
+                         what, lo, hi, axes[c]);
+  }
+  return {};
+}
+
 }  // namespace
+
+std::string draco_range_problem(const Mesh& mesh, const DracoAttributes& which, const DracoAttributes& quantised,
+                                bool quantise_positions) {
+  const Attributes& a = mesh.attributes;
+  std::string why = float_range_problem(mesh.positions, "positions", "xyz", quantise_positions);
+  if (why.empty() && which.normals && mesh.has_normals()) why = float_range_problem(a.normals, "normals", "xyz", quantised.normals);
+  if (why.empty() && which.uvs && mesh.has_uvs()) why = float_range_problem(a.uvs, "UVs", "uv", quantised.uvs);
+  return why;
+}
 
 std::unique_ptr<draco::Mesh> to_draco(const Mesh& mesh, const DracoAttributes& which) {
   auto dm = std::make_unique<draco::Mesh>();

@@ -4,12 +4,19 @@
 
 #include <draco/mesh/mesh.h>
 #include <memory>
+#include <string>
 
 namespace lodkit::detail {
 
 struct DracoAttributes {
   bool normals = true, uvs = true, colours = true;
 };
+
+/// Why Draco cannot store `mesh`'s attributes (those in `which`), or empty when it can. Draco keeps
+/// 32-bit floats, and quantising an attribute (those in `quantised`) takes the extent of its values in
+/// float: a larger extent overflows to infinity and crashes its encoder.
+std::string draco_range_problem(const Mesh& mesh, const DracoAttributes& which, const DracoAttributes& quantised,
+                                bool quantise_positions);
 
 /// One Draco point per lodkit vertex (identity mapping); colours become normalised uint8 RGBA.
 std::unique_ptr<draco::Mesh> to_draco(const Mesh& mesh, const DracoAttributes& which = {});

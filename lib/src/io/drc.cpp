@@ -41,7 +41,11 @@ void write_drc(const Mesh& mesh, Output& out, const WriteOptions& options) {
     throw Error(fmt::format("Draco compression level must be 0 to 10, not {}", d.compression_level));
   if (mesh.num_faces() == 0) throw Error("Draco cannot store a mesh without faces");
 
-  const auto dm = to_draco(mesh, {options.normals, options.uvs, options.colours});
+  const DracoAttributes which{options.normals, options.uvs, options.colours};
+  if (const std::string why = draco_range_problem(mesh, which, {true, d.normal_bits > 0, d.uv_bits > 0}, d.position_bits > 0);
+      !why.empty())
+    throw Error("Draco cannot store this mesh: " + why);
+  const auto dm = to_draco(mesh, which);
   draco::Encoder encoder;
   const int speed = 10 - d.compression_level;
   encoder.SetSpeedOptions(speed, speed);

@@ -114,6 +114,7 @@ std::string encode_base(const ProgressiveMesh& pm, const Header& h, const std::v
     }
     for (Index f = 0; f < pm.base_faces; ++f)
       for (int k = 0; k < 3; ++k) base.triangles(f, k) = pm.face_corners[f][k];
+    if (!detail::draco_range_problem(base, {}, {true, pm.has_normals, pm.has_uvs}, true).empty()) return {};
     const auto dm = detail::to_draco(base);
     draco::Encoder encoder;
     encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
