@@ -298,6 +298,11 @@ TEST(CliTerrain, BadOptionsAndBasesFailClearly) {
   r = run(dir, "terrain -o t.ply --base bad.obj");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("bad.obj"), std::string::npos);
+  // Two corners at one position: a valid mesh file, but no terrain base. The error names the file.
+  test::write_text(dir / "flat.obj", "v 0 0 0\nv 1 0 0\nv 0 0 0\nf 1 2 3\n");
+  r = run(dir, "terrain -o t.ply --base flat.obj");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("flat.obj: terrain base: face 0 repeats a vertex"), std::string::npos) << r.err;
   ASSERT_EQ(run(dir, "generate icosphere -o ico.ply --subdivisions 1").status, 0);
   const std::string before = test::read_bytes(dir / "ico.ply");
   EXPECT_EQ(run(dir, "terrain --base ico.ply -o ico.ply").status, 1);
