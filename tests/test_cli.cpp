@@ -216,6 +216,13 @@ TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
   r = run(dir, "pm extract t.pm -o small.obj --faces 300");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_LE(read_mesh(dir / "small.obj").num_faces(), 300);
+  // A ratio reads only the prefix its level needs, as a face count does.
+  r = run(dir, "pm extract t.pm -o half.obj --ratio 0.25 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LE(read_mesh(dir / "half.obj").num_faces(), input.num_faces() / 4 + 1);
+  const std::size_t at = r.out.find("\"bytes_read\": ");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  EXPECT_LT(std::stoull(r.out.substr(at + 14)), std::filesystem::file_size(dir / "t.pm"));
   r = run(dir, "pm extract t.pm -o far.ply --pixel-error 1 --distance 100 --viewport 1080");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_LT(read_mesh(dir / "far.ply").num_faces(), input.num_faces());

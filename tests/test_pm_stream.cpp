@@ -166,6 +166,25 @@ TEST(PmStream, PrefixReadStopsAtTheFaceBudget) {
   // The prefix's top level is the same mesh as the whole stream's level (in stream order).
   EXPECT_TRUE(same_mesh(extract_level(r.pm, r.pm.max_level(), VertexOrder::Stream).mesh,
                         extract_level(pm, r.pm.max_level(), VertexOrder::Stream).mesh));
+  EXPECT_EQ(r.total_faces, pm.num_faces(pm.max_level()));  // from the header, though not read
+
+  // A ratio of the finest level's faces reads the same prefix as its face count; with both, the
+  // smaller budget holds.
+  PmReadOptions by_ratio;
+  by_ratio.max_ratio = 0.25;
+  const Index quarter = static_cast<Index>(std::llround(0.25 * double(pm.num_faces(pm.max_level()))));
+  PmReadOptions by_faces;
+  by_faces.max_faces = quarter;
+  const PmReadResult a = read_pm_from_memory(bytes, "mem.pm", by_ratio), b = read_pm_from_memory(bytes, "mem.pm", by_faces);
+  EXPECT_EQ(a.pm.max_level(), b.pm.max_level());
+  EXPECT_EQ(a.bytes_read, b.bytes_read);
+  EXPECT_LT(a.bytes_read, bytes.size());
+  by_ratio.max_faces = 100;
+  const PmReadResult c = read_pm_from_memory(bytes, "mem.pm", by_ratio);
+  EXPECT_LE(c.pm.num_faces(c.pm.max_level()), 100);
+  EXPECT_LT(c.pm.max_level(), a.pm.max_level());
+  by_ratio.max_ratio = 1.5;
+  EXPECT_THROW(read_pm_from_memory(bytes, "mem.pm", by_ratio), Error);
 }
 
 TEST(PmStream, EveryTruncationGivesAValidPrefixOrAClearError) {

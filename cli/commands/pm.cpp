@@ -129,7 +129,8 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
 }
 
 /// The level the selection options ask for, and a sentence saying why.
-Index choose_level(const PmCliOptions& o, const ProgressiveMesh& pm, std::string& why) {
+Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& why) {
+  const ProgressiveMesh& pm = r.pm;
   const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
   if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
   if (o.faces) {
@@ -137,7 +138,8 @@ Index choose_level(const PmCliOptions& o, const ProgressiveMesh& pm, std::string
     return level_for_faces(pm, *o.faces);
   }
   if (o.ratio) {
-    const Index faces = static_cast<Index>(std::llround(*o.ratio * pm.num_faces(pm.max_level())));
+    // Of the finest level, which a prefix read does not hold: the header's count.
+    const Index faces = static_cast<Index>(std::llround(*o.ratio * double(r.total_faces)));
     why = fmt::format("ratio {} = at most {} faces", *o.ratio, faces);
     return level_for_faces(pm, faces);
   }
@@ -158,11 +160,12 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   // Progressive read: with a face budget only the blocks that level needs are read.
   PmReadOptions ro;
   if (o.faces && !o.input_order) ro.max_faces = *o.faces;
+  if (o.ratio && !o.input_order) ro.max_ratio = *o.ratio;
   const auto start = std::chrono::steady_clock::now();
   const PmReadResult r = read_pm(o.input, ro);
   warn(r, global);
   std::string why;
-  const Index level = choose_level(o, r.pm, why);
+  const Index level = choose_level(o, r, why);
   const ExtractedLevel e = extract_level(r.pm, level, o.input_order ? VertexOrder::Input : VertexOrder::Stream);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_output(e.mesh, o.output, o.format, WriteOptions{}, o.input);

@@ -50,6 +50,9 @@ std::string write_pm_to_memory(const ProgressiveMesh& pm, const PmWriteOptions& 
 struct PmReadOptions {
   /// Stop reading once the next split would exceed this many faces (progressive transmission).
   std::optional<Index> max_faces{};
+  /// The same as a fraction of the finest level's faces (as the header announces them), rounded to
+  /// the nearest count; with max_faces too, the smaller budget holds.
+  std::optional<double> max_ratio{};
 };
 
 struct PmReadResult {
@@ -60,11 +63,12 @@ struct PmReadResult {
   std::string warning;
   std::size_t bytes_read = 0;
   Index total_splits = 0;   ///< splits the header announces
+  Index total_faces = 0;    ///< faces of the finest level, as the header announces them
   int position_bits = 0;    ///< 0: lossless
   PmStreamStats stats;      ///< of the part that was read
 };
 
-/// Reads a stream, or its prefix up to `options.max_faces`. A truncated or corrupted split block ends
+/// Reads a stream, or its prefix up to `options.max_faces` or `options.max_ratio`. A truncated or corrupted split block ends
 /// the read with a warning and the levels before it. \throw Error "<path>: <problem>" when not even
 /// the header and base mesh are intact.
 PmReadResult read_pm(const std::filesystem::path& path, const PmReadOptions& options = {});

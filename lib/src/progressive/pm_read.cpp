@@ -449,6 +449,14 @@ PmReadResult read_stream(Source& src, const std::string& name, const PmReadOptio
   std::string why;
   if (!decode_header(head.data(), h, why)) throw Error(fmt::format("{}: {}", name, why));
   result.total_splits = static_cast<Index>(h.splits);
+  result.total_faces = static_cast<Index>(h.faces);
+  std::optional<Index> max_faces = options.max_faces;
+  if (options.max_ratio) {
+    if (!(*options.max_ratio >= 0 && *options.max_ratio <= 1))
+      throw Error(fmt::format("{}: face ratio must be between 0 and 1, got {}", name, *options.max_ratio));
+    const auto by_ratio = static_cast<Index>(std::llround(*options.max_ratio * double(h.faces)));
+    max_faces = std::min(max_faces.value_or(by_ratio), by_ratio);
+  }
   result.position_bits = h.position_bits;
   result.stats.header_bytes = kHeaderSize;
   ProgressiveMesh& pm = result.pm;
@@ -488,7 +496,7 @@ PmReadResult read_stream(Source& src, const std::string& name, const PmReadOptio
   if (st.quantised) pm.level_error[0] += slack;
   result.stats.base_bytes = src.consumed() - kHeaderSize;
 
-  bool stopped = options.max_faces && pm.num_faces(0) > *options.max_faces;
+  bool stopped = max_faces && pm.num_faces(0) > *max_faces;
   bool order_seen = false;
   while (!stopped) {
     const std::size_t before = src.consumed();
@@ -504,7 +512,7 @@ PmReadResult read_stream(Source& src, const std::string& name, const PmReadOptio
       }
       // A block that turns out malformed is cut off whole (the state is not used again).
       const Index level = pm.max_level();
-      if (!decode_block(payload, h, st, pm, slack, options.max_faces, stopped, why)) {
+      if (!decode_block(payload, h, st, pm, slack, max_faces, stopped, why)) {
         truncate(pm, level);
         result.warning = fmt::format("{}: damaged split block ({}) after {} of {} splits; using levels 0..{}", name, why,
                                      pm.splits.size(), h.splits, pm.splits.size());
