@@ -52,10 +52,9 @@ std::string float_range_problem(const Matrix& values, const char* what, const ch
 
 }  // namespace
 
-std::string draco_range_problem(const Mesh& mesh, const DracoAttributes& which, const DracoAttributes& quantised,
-                                bool quantise_positions) {
+std::string draco_range_problem(const Mesh& mesh, const DracoAttributes& which, const DracoQuantised& quantised) {
   const Attributes& a = mesh.attributes;
-  std::string why = float_range_problem(mesh.positions, "positions", "xyz", quantise_positions);
+  std::string why = float_range_problem(mesh.positions, "positions", "xyz", quantised.positions);
   if (why.empty() && which.normals && mesh.has_normals()) why = float_range_problem(a.normals, "normals", "xyz", quantised.normals);
   if (why.empty() && which.uvs && mesh.has_uvs()) why = float_range_problem(a.uvs, "UVs", "uv", quantised.uvs);
   return why;

@@ -42,7 +42,7 @@ void write_drc(const Mesh& mesh, Output& out, const WriteOptions& options) {
   if (mesh.num_faces() == 0) throw Error("Draco cannot store a mesh without faces");
 
   const DracoAttributes which{options.normals, options.uvs, options.colours};
-  if (const std::string why = draco_range_problem(mesh, which, {true, d.normal_bits > 0, d.uv_bits > 0}, d.position_bits > 0);
+  if (const std::string why = draco_range_problem(mesh, which, {d.position_bits > 0, d.normal_bits > 0, d.uv_bits > 0});
       !why.empty())
     throw Error("Draco cannot store this mesh: " + why);
   const auto dm = to_draco(mesh, which);

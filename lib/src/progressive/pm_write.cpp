@@ -114,7 +114,7 @@ std::string encode_base(const ProgressiveMesh& pm, const Header& h, const std::v
     }
     for (Index f = 0; f < pm.base_faces; ++f)
       for (int k = 0; k < 3; ++k) base.triangles(f, k) = pm.face_corners[f][k];
-    if (!detail::draco_range_problem(base, {}, {true, pm.has_normals, pm.has_uvs}, true).empty()) return {};
+    if (!detail::draco_range_problem(base, {}, {}).empty()) return {};  // (positions, normals and UVs quantised)
     const auto dm = detail::to_draco(base);
     draco::Encoder encoder;
     encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
@@ -312,7 +312,7 @@ std::string write_pm_to_memory(const ProgressiveMesh& pm, const PmWriteOptions& 
     h.flags |= kDracoBase;
     bool same = !base.empty() && decode_base(base, h, st, nullptr, why);
     for (Index f = 0; same && f < pm.base_faces; ++f) same = st.corners[static_cast<std::size_t>(f)] == pm.face_corners[f];
-    if (!same) {  // Draco renumbered something: fall back to the plain quantised base
+    if (!same) {  // Draco refused the base or renumbered something: fall back to the plain quantised base
       h.flags &= static_cast<std::uint16_t>(~kDracoBase);
       kind = kQuantisedBase;
       base = encode_base(pm, h, aq, kind, o);
