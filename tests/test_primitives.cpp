@@ -255,10 +255,10 @@ TEST(Geometry, BoundRowsKernelsAgreeBitForBitAndPickTheSameTriangles) {
       std::size_t lowest[2];
       for (int plain = 0; plain < 2; ++plain) {
         detail::BoundRows::use_vector_kernel(plain == 0);
-        rows.lower_bounds2(x);
+        const double* b = rows.lower_bounds2(x);
         below[plain] = rows.below(limit);
         lowest[plain] = rows.lowest();
-        bounds[plain].assign(rows.bounds(), rows.bounds() + count);
+        bounds[plain].assign(b, b + count);
         plane[plain].assign(rows.plane_distances(), rows.plane_distances() + count);
       }
       detail::BoundRows::use_vector_kernel(true);

@@ -51,8 +51,6 @@ class BoundRows {
   /// Whether the AVX2 kernel is used where the CPU has it (default); off, the plain one, which must
   /// give the same bits (tests switch it to check that).
   static void use_vector_kernel(bool on);
-  /// The bounds of the last lower_bounds2(x).
-  const double* bounds() const { return bounds_.data(); }
 
  private:
   std::size_t m_ = 0, blocks_ = 0;

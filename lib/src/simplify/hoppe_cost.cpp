@@ -146,7 +146,7 @@ class HoppeScorer {
           const Eigen::Vector3d fixed = (1 - b) * s.position[end];
           sum_b2 += b * b;
           rhs += b * (x - fixed);
-          curve_projections_.push_back({x, 1.0, b, fixed});
+          curve_projections_.push_back({x, b, fixed});
         }
       }
       for (Index w : ring_) {
@@ -165,7 +165,7 @@ class HoppeScorer {
         }
         for (const Projection& pr : curve_projections_) {
           const double d = (pr.x - pr.b * solved - pr.fixed).squaredNorm();
-          solved_energy += pr.weight * d;
+          solved_energy += d;
           solved_worst = std::max(solved_worst, d);
         }
         for (Index w : ring_) solved_energy += kappa * (solved - s.position[w]).squaredNorm();
@@ -368,10 +368,10 @@ class HoppeScorer {
   std::vector<Tri> tri_;
   std::vector<Nearest> nearest_;  ///< per point of points_: its projection onto the new star
   BoundRows rows_;  ///< the star's planes
-  // A boundary point's projection (the surface points' are read from nearest_).
+  // A boundary point's projection (the surface points' are read from nearest_); each weighs 1.
   struct Projection {
     Eigen::Vector3d x;  // the sample point
-    double weight, b;
+    double b;
     Eigen::Vector3d fixed;
   };
   std::vector<Projection> curve_projections_;
