@@ -223,9 +223,18 @@ TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
   const std::size_t at = r.out.find("\"bytes_read\": ");
   ASSERT_NE(at, std::string::npos) << r.out;
   EXPECT_LT(std::stoull(r.out.substr(at + 14)), std::filesystem::file_size(dir / "t.pm"));
-  r = run(dir, "pm extract t.pm -o far.ply --pixel-error 1 --distance 100 --viewport 1080");
-  ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_LT(read_mesh(dir / "far.ply").num_faces(), input.num_faces());
+  // So do error and screen-space budgets.
+  auto bytes_read = [](const std::string& json) {
+    const std::size_t at = json.find("\"bytes_read\": ");
+    return at == std::string::npos ? std::uintmax_t(0) : std::uintmax_t(std::stoull(json.substr(at + 14)));
+  };
+  for (const char* budget : {"--pixel-error 1 --distance 100 --viewport 1080", "--max-error 0.1"}) {
+    r = run(dir, std::string("pm extract t.pm -o far.ply --json ") + budget);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_LT(read_mesh(dir / "far.ply").num_faces(), input.num_faces()) << budget;
+    EXPECT_GT(bytes_read(r.out), 0u) << r.out;
+    EXPECT_LT(bytes_read(r.out), std::filesystem::file_size(dir / "t.pm")) << budget;
+  }
   r = run(dir, "pm geomorph t.pm --from 200 --to 800 --frames 3 -o m.ply");
   ASSERT_EQ(r.status, 0) << r.err;
   for (const char* f : {"m_000.ply", "m_001.ply", "m_002.ply"}) EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;

@@ -187,6 +187,63 @@ TEST(PmStream, PrefixReadStopsAtTheFaceBudget) {
   EXPECT_THROW(read_pm_from_memory(bytes, "mem.pm", by_ratio), Error);
 }
 
+TEST(PmStream, ErrorAndViewBudgetsReadOnlyThePrefixTheirLevelNeeds) {
+  const Mesh input = test::bumpy_sphere(3, 0.05);
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  for (int bits : {0, 14}) {
+    PmWriteOptions wo;
+    wo.position_bits = bits;
+    wo.splits_per_block = 16;
+    const std::string bytes = write_pm_to_memory(pm, wo);
+    const PmReadResult whole = read_pm_from_memory(bytes, "mem.pm");
+    const ProgressiveMesh& full = whole.pm;
+    ASSERT_TRUE(whole.complete);
+    // Budgets from above the base's bound down to zero: the prefix ends at the very level the whole
+    // stream's selection picks, and that level is the same mesh.
+    const double top = full.level_error[0];
+    for (double budget : {2 * top, top, 0.3 * top, 0.05 * top, 0.01 * top, 0.0}) {
+      PmReadOptions ro;
+      ro.max_error = budget;
+      const PmReadResult r = read_pm_from_memory(bytes, "mem.pm", ro);
+      const Index level = level_for_error(full, budget);
+      EXPECT_TRUE(r.warning.empty()) << r.warning;
+      EXPECT_EQ(r.pm.max_level(), level) << bits << " bits, budget " << budget;
+      EXPECT_EQ(level_for_error(r.pm, budget), level);
+      EXPECT_EQ(r.complete, level == full.max_level());
+      if (level + 32 < full.max_level()) EXPECT_LT(r.bytes_read, whole.bytes_read) << budget;
+      EXPECT_TRUE(same_mesh(extract_level(r.pm, level, VertexOrder::Stream).mesh,
+                            extract_level(full, level, VertexOrder::Stream).mesh));
+    }
+    for (double distance : {3.0, 10.0, 100.0}) {
+      PmReadOptions ro;
+      ro.view = ScreenSpaceBudget{1.0, distance, 60.0, 1080.0};
+      const PmReadResult r = read_pm_from_memory(bytes, "mem.pm", ro);
+      const Index level = level_for_view(full, *ro.view);
+      EXPECT_EQ(r.pm.max_level(), level) << bits << " bits, distance " << distance;
+      EXPECT_EQ(level_for_view(r.pm, *ro.view), level);
+    }
+    // With a face budget too, the coarser level wins.
+    PmReadOptions both;
+    both.max_error = 0.0;
+    both.max_faces = 200;
+    EXPECT_EQ(read_pm_from_memory(bytes, "mem.pm", both).pm.max_level(), level_for_faces(full, 200));
+  }
+  // Budgets that make no sense fail with the stream's name.
+  const std::string bytes = write_pm_to_memory(pm);
+  PmReadOptions negative;
+  negative.max_error = -1.0;
+  EXPECT_THROW(read_pm_from_memory(bytes, "mem.pm", negative), Error);
+  PmReadOptions blind;
+  blind.view = ScreenSpaceBudget{1.0, 10.0, 0.0, 1080.0};
+  try {
+    read_pm_from_memory(bytes, "mem.pm", blind);
+    ADD_FAILURE() << "a zero field of view was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("mem.pm: "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("field of view"), std::string::npos) << e.what();
+  }
+}
+
 TEST(PmStream, EveryTruncationGivesAValidPrefixOrAClearError) {
   const Mesh input = test::bumpy_sphere(1, 0.05);  // 80 faces: a small stream, every byte tried
   const ProgressiveMesh pm = build_progressive_mesh(input);

@@ -131,8 +131,6 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
 /// The level the selection options ask for, and a sentence saying why.
 Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& why) {
   const ProgressiveMesh& pm = r.pm;
-  const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
-  if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
   if (o.faces) {
     why = fmt::format("at most {} faces", *o.faces);
     return level_for_faces(pm, *o.faces);
@@ -157,10 +155,16 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
 
 int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   refuse_to_overwrite(o.output, o.input);  // before reading: fail fast
-  // Progressive read: with a face budget only the blocks that level needs are read.
+  const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
+  if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
+  // Progressive read: only the blocks the chosen level needs (the input order comes after them all).
   PmReadOptions ro;
-  if (o.faces && !o.input_order) ro.max_faces = *o.faces;
-  if (o.ratio && !o.input_order) ro.max_ratio = *o.ratio;
+  if (!o.input_order) {
+    ro.max_faces = o.faces;
+    ro.max_ratio = o.ratio;
+    ro.max_error = o.max_error;
+    if (o.pixel_error) ro.view = ScreenSpaceBudget{*o.pixel_error, o.distance, o.fov, o.viewport};
+  }
   const auto start = std::chrono::steady_clock::now();
   const PmReadResult r = read_pm(o.input, ro);
   warn(r, global);

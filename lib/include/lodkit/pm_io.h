@@ -53,11 +53,18 @@ struct PmReadOptions {
   /// The same as a fraction of the finest level's faces (as the header announces them), rounded to
   /// the nearest count; with max_faces too, the smaller budget holds.
   std::optional<double> max_ratio{};
+  /// Stop at the coarsest level whose error bound is at most this: the level level_for_error() picks
+  /// from the whole stream, read without the finer splits.
+  std::optional<double> max_error{};
+  /// Stop at the coarsest level whose bound projects within this view's pixel budget: the level
+  /// level_for_view() picks from the whole stream.
+  std::optional<ScreenSpaceBudget> view{};
+  // With several budgets, the read stops at the coarsest of the levels they pick.
 };
 
 struct PmReadResult {
   ProgressiveMesh pm;
-  /// Every split of the stream was read (false when stopped by max_faces or by damage).
+  /// Every split of the stream was read (false when stopped by a budget or by damage).
   bool complete = false;
   /// Non-empty when the stream was damaged: what was wrong and which levels survive.
   std::string warning;
@@ -68,9 +75,9 @@ struct PmReadResult {
   PmStreamStats stats;      ///< of the part that was read
 };
 
-/// Reads a stream, or its prefix up to `options.max_faces` or `options.max_ratio`. A truncated or corrupted split block ends
-/// the read with a warning and the levels before it. \throw Error "<path>: <problem>" when not even
-/// the header and base mesh are intact.
+/// Reads a stream, or only the prefix that the budgets in `options` need. A truncated or corrupted
+/// split block ends the read with a warning and the levels before it. \throw Error "<path>: <problem>"
+/// when not even the header and base mesh are intact, or a budget is invalid.
 PmReadResult read_pm(const std::filesystem::path& path, const PmReadOptions& options = {});
 PmReadResult read_pm_from_memory(std::string_view bytes, const std::string& name, const PmReadOptions& options = {});
 

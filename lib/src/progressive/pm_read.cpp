@@ -250,10 +250,54 @@ bool decode_base(std::string_view payload, const Header& h, StreamState& st, Pro
 
 namespace {
 
+/// Where a prefix read stops: before the split that would exceed the face budget, or at the first
+/// level that is good enough for the error or view budget (levels' bounds do not increase).
+struct StopRule {
+  std::optional<Index> max_faces;
+  std::optional<double> max_error;
+  std::optional<ScreenSpaceBudget> view;
+  double radius = 0;
+
+  bool too_many(Index faces) const { return max_faces && faces > *max_faces; }
+  /// The same tests as level_for_error() and level_for_view(), so the prefix ends at their level.
+  bool good_enough(double level_error) const {
+    return (max_error && level_error <= *max_error) ||
+           (view && projected_pixels(level_error, radius, *view) <= view->pixel_error);
+  }
+};
+
+StopRule stop_rule(const PmReadOptions& options, const Header& h, const std::string& name) {
+  StopRule rule;
+  rule.max_faces = options.max_faces;
+  if (options.max_ratio) {
+    if (!(*options.max_ratio >= 0 && *options.max_ratio <= 1))
+      throw Error(fmt::format("{}: face ratio must be between 0 and 1, got {}", name, *options.max_ratio));
+    const auto by_ratio = static_cast<Index>(std::llround(*options.max_ratio * double(h.faces)));
+    rule.max_faces = std::min(rule.max_faces.value_or(by_ratio), by_ratio);
+  }
+  if (options.max_error && !(*options.max_error >= 0))
+    throw Error(fmt::format("{}: error budget must not be negative, got {}", name, *options.max_error));
+  rule.max_error = options.max_error;
+  if (options.view) {
+    if (!(options.view->pixel_error >= 0))
+      throw Error(fmt::format("{}: pixel error must not be negative, got {}", name, options.view->pixel_error));
+    rule.view = options.view;
+    const Eigen::AlignedBox3d bounds(Eigen::Vector3d(h.box_min[0], h.box_min[1], h.box_min[2]),
+                                     Eigen::Vector3d(h.box_max[0], h.box_max[1], h.box_max[2]));
+    rule.radius = bounds.isEmpty() ? 0.0 : 0.5 * bounds.diagonal().norm();  // as bounding_radius()
+    try {
+      projected_pixels(0.0, rule.radius, *rule.view);  // checks the field of view and viewport
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", name, e.what()));
+    }
+  }
+  return rule;
+}
+
 /// Decodes one block of splits into `pm`, applying each to the state; sets `stopped` and returns
-/// before the first split that would exceed `stop_faces`. False, with `why`, if the block is malformed.
+/// where `rule` says the read should end. False, with `why`, if the block is malformed.
 bool decode_block(std::string_view payload, const Header& h, StreamState& st, ProgressiveMesh& pm, double slack,
-                  std::optional<Index> stop_faces, bool& stopped, std::string& why) {
+                  const StopRule& rule, bool& stopped, std::string& why) {
   ByteReader r(payload.data(), payload.size());
   std::uint32_t count = 0;
   std::uint8_t predictor = 0;
@@ -284,6 +328,10 @@ bool decode_block(std::string_view payload, const Header& h, StreamState& st, Pr
     return false;
   };
   for (std::uint32_t n = 0; n < count; ++n) {
+    if (rule.good_enough(pm.level_error.back())) {
+      stopped = true;
+      return true;
+    }
     if (pm.splits.size() >= h.splits) return bad("more splits than the header announces");
     SplitRecord rec;
     std::uint32_t v = 0;
@@ -390,7 +438,7 @@ bool decode_block(std::string_view payload, const Header& h, StreamState& st, Pr
     const std::int64_t next = std::int64_t(code) - unzigzag(v);
     if (next < 0 || next > 65535) return bad("bad error bound");
     code = static_cast<std::uint16_t>(next);
-    if (stop_faces && st.num_faces() + rec.num_faces > *stop_faces) {
+    if (rule.too_many(st.num_faces() + rec.num_faces)) {
       stopped = true;
       return true;
     }
@@ -450,13 +498,7 @@ PmReadResult read_stream(Source& src, const std::string& name, const PmReadOptio
   if (!decode_header(head.data(), h, why)) throw Error(fmt::format("{}: {}", name, why));
   result.total_splits = static_cast<Index>(h.splits);
   result.total_faces = static_cast<Index>(h.faces);
-  std::optional<Index> max_faces = options.max_faces;
-  if (options.max_ratio) {
-    if (!(*options.max_ratio >= 0 && *options.max_ratio <= 1))
-      throw Error(fmt::format("{}: face ratio must be between 0 and 1, got {}", name, *options.max_ratio));
-    const auto by_ratio = static_cast<Index>(std::llround(*options.max_ratio * double(h.faces)));
-    max_faces = std::min(max_faces.value_or(by_ratio), by_ratio);
-  }
+  const StopRule rule = stop_rule(options, h, name);
   result.position_bits = h.position_bits;
   result.stats.header_bytes = kHeaderSize;
   ProgressiveMesh& pm = result.pm;
@@ -496,9 +538,11 @@ PmReadResult read_stream(Source& src, const std::string& name, const PmReadOptio
   if (st.quantised) pm.level_error[0] += slack;
   result.stats.base_bytes = src.consumed() - kHeaderSize;
 
-  bool stopped = max_faces && pm.num_faces(0) > *max_faces;
+  // Only while splits remain: the blocks after them (input order, extras) belong to a whole read.
+  bool stopped = h.splits > 0 && (rule.too_many(pm.num_faces(0)) || rule.good_enough(pm.level_error[0]));
   bool order_seen = false;
   while (!stopped) {
+    if (pm.splits.size() < h.splits && rule.good_enough(pm.level_error.back())) break;  // before the next block
     const std::size_t before = src.consumed();
     if (!read_chunk(type)) {
       result.warning = fmt::format("{}: {} after {} of {} splits; using levels 0..{}", name, why, pm.splits.size(), h.splits,
@@ -512,7 +556,7 @@ PmReadResult read_stream(Source& src, const std::string& name, const PmReadOptio
       }
       // A block that turns out malformed is cut off whole (the state is not used again).
       const Index level = pm.max_level();
-      if (!decode_block(payload, h, st, pm, slack, max_faces, stopped, why)) {
+      if (!decode_block(payload, h, st, pm, slack, rule, stopped, why)) {
         truncate(pm, level);
         result.warning = fmt::format("{}: damaged split block ({}) after {} of {} splits; using levels 0..{}", name, why,
                                      pm.splits.size(), h.splits, pm.splits.size());
