@@ -2,7 +2,10 @@
 #include <gtest/gtest.h>
 #include <lodkit/inspect.h>
 #include <lodkit/io.h>
+#include <lodkit/metrics.h>
 
+#include <cmath>
+#include <numbers>
 #include <sys/wait.h>
 
 #include "bad_corpus.h"
@@ -225,8 +228,8 @@ TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
   EXPECT_LT(std::stoull(r.out.substr(at + 14)), std::filesystem::file_size(dir / "t.pm"));
   // So do error and screen-space budgets.
   auto bytes_read = [](const std::string& json) {
-    const std::size_t at = json.find("\"bytes_read\": ");
-    return at == std::string::npos ? std::uintmax_t(0) : std::uintmax_t(std::stoull(json.substr(at + 14)));
+    const std::size_t where = json.find("\"bytes_read\": ");
+    return where == std::string::npos ? std::uintmax_t(0) : std::uintmax_t(std::stoull(json.substr(where + 14)));
   };
   for (const char* budget : {"--pixel-error 1 --distance 100 --viewport 1080", "--max-error 0.1"}) {
     r = run(dir, std::string("pm extract t.pm -o far.ply --json ") + budget);
@@ -235,6 +238,23 @@ TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
     EXPECT_GT(bytes_read(r.out), 0u) << r.out;
     EXPECT_LT(bytes_read(r.out), std::filesystem::file_size(dir / "t.pm")) << budget;
   }
+  // Measured levels: selection by what a viewer sees picks a coarser level than the bound does.
+  r = run(dir, "pm build t.ply -o tm.pm --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(run(dir, "pm info tm.pm").out.find("measured"), std::string::npos);
+  const auto faces_of = [](const std::string& json) {
+    const std::size_t where = json.find("\"faces\": ");
+    return where == std::string::npos ? -1 : std::stoi(json.substr(where + 9));
+  };
+  const CliRun seen = run(dir, "pm extract tm.pm -o seen.ply --json --pixel-error 1 --distance 30");
+  const CliRun certified = run(dir, "pm extract tm.pm -o certified.ply --json --pixel-error 1 --distance 30 --certified");
+  ASSERT_EQ(seen.status, 0) << seen.err;
+  ASSERT_EQ(certified.status, 0) << certified.err;
+  EXPECT_NE(seen.out.find("measured error projects"), std::string::npos) << seen.out;
+  EXPECT_GT(faces_of(seen.out), 0) << seen.out;
+  EXPECT_LT(faces_of(seen.out), faces_of(certified.out)) << seen.out << certified.out;
+  EXPECT_LE(compare(input, read_mesh(dir / "seen.ply")).hausdorff,
+            30.0 * 2 * std::tan(std::numbers::pi / 6) / 1080.0);  // within one pixel at the nearest point
   r = run(dir, "pm geomorph t.pm --from 200 --to 800 --frames 3 -o m.ply");
   ASSERT_EQ(r.status, 0) << r.err;
   for (const char* f : {"m_000.ply", "m_001.ply", "m_002.ply"}) EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;

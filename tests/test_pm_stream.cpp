@@ -210,7 +210,9 @@ TEST(PmStream, ErrorAndViewBudgetsReadOnlyThePrefixTheirLevelNeeds) {
       EXPECT_EQ(r.pm.max_level(), level) << bits << " bits, budget " << budget;
       EXPECT_EQ(level_for_error(r.pm, budget), level);
       EXPECT_EQ(r.complete, level == full.max_level());
-      if (level + 32 < full.max_level()) EXPECT_LT(r.bytes_read, whole.bytes_read) << budget;
+      if (level + 32 < full.max_level()) {
+        EXPECT_LT(r.bytes_read, whole.bytes_read) << budget;
+      }
       EXPECT_TRUE(same_mesh(extract_level(r.pm, level, VertexOrder::Stream).mesh,
                             extract_level(full, level, VertexOrder::Stream).mesh));
     }
@@ -242,6 +244,57 @@ TEST(PmStream, ErrorAndViewBudgetsReadOnlyThePrefixTheirLevelNeeds) {
     EXPECT_NE(std::string(e.what()).find("mem.pm: "), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("field of view"), std::string::npos) << e.what();
   }
+}
+
+TEST(PmStream, MeasuredLevelsTravelWithTheStreamAndGuideThePrefixRead) {
+  const Mesh input = test::bumpy_sphere(3, 0.05);
+  ProgressiveOptions po;
+  po.measure_levels = true;
+  const ProgressiveMesh pm = build_progressive_mesh(input, po);
+  ASSERT_FALSE(pm.measured.empty());
+  for (int bits : {0, 14}) {
+    PmWriteOptions wo;
+    wo.position_bits = bits;
+    wo.splits_per_block = 16;
+    PmStreamStats stats;
+    const std::string bytes = write_pm_to_memory(pm, wo, &stats);
+    EXPECT_GT(stats.measured_bytes, 0u);
+    const PmReadResult whole = read_pm_from_memory(bytes, "mem.pm");
+    ASSERT_EQ(whole.pm.measured.size(), pm.measured.size());
+    const double slack = bits ? 0.5 * std::sqrt(3.0) * pm.bounds.sizes().maxCoeff() / double((1 << bits) - 1) : 0.0;
+    for (std::size_t i = 0; i < pm.measured.size(); ++i) {
+      EXPECT_EQ(whole.pm.measured[i].level, pm.measured[i].level);
+      EXPECT_EQ(whole.pm.measured[i].rms, pm.measured[i].rms);
+      if (bits == 0) {
+        EXPECT_EQ(whole.pm.measured[i].hausdorff, pm.measured[i].hausdorff);  // exact
+      } else {  // plus the quantisation's reach, as the bounds
+        EXPECT_NEAR(whole.pm.measured[i].hausdorff, pm.measured[i].hausdorff + slack, 0.01 * slack);
+      }
+    }
+    // A prefix read by measured error stops at the level selection from the whole stream picks.
+    for (std::size_t i : {std::size_t(1), pm.measured.size() / 2}) {
+      PmReadOptions ro;
+      ro.max_error = whole.pm.measured[i].hausdorff;
+      ro.select_by = LevelErrorKind::Measured;
+      const PmReadResult r = read_pm_from_memory(bytes, "mem.pm", ro);
+      const Index level = level_for_error(whole.pm, *ro.max_error, LevelErrorKind::Measured);
+      EXPECT_EQ(level, pm.measured[i].level);
+      EXPECT_EQ(r.pm.max_level(), level);
+      EXPECT_LT(r.bytes_read, bytes.size());
+      EXPECT_EQ(level_for_error(r.pm, *ro.max_error, LevelErrorKind::Measured), level);
+      EXPECT_LT(r.pm.max_level(), read_pm_from_memory(bytes, "mem.pm", PmReadOptions{.max_error = ro.max_error}).pm.max_level());
+    }
+  }
+  // The block costs its own bytes only; damaged, it is caught like any other block.
+  PmStreamStats stats;
+  std::string bytes = write_pm_to_memory(pm, {}, &stats);
+  const std::string plain = write_pm_to_memory(build_progressive_mesh(input));
+  EXPECT_EQ(bytes.size() - plain.size(), stats.measured_bytes);
+  bytes[stats.header_bytes + stats.base_bytes + 7] ^= 0x10;
+  const PmReadResult damaged = read_pm_from_memory(bytes, "flip.pm");
+  EXPECT_NE(damaged.warning.find("checksum"), std::string::npos) << damaged.warning;
+  EXPECT_EQ(damaged.pm.max_level(), 0);
+  EXPECT_TRUE(damaged.pm.measured.empty());
 }
 
 TEST(PmStream, EveryTruncationGivesAValidPrefixOrAClearError) {

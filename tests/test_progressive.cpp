@@ -6,7 +6,9 @@
 #include <lodkit/primitives.h>
 #include <lodkit/progressive.h>
 
+#include <cmath>
 #include <map>
+#include <numbers>
 #include <random>
 #include <set>
 
@@ -172,6 +174,65 @@ TEST(ProgressiveMesh, ErrorBoundHoldsAndShrinksWithTheLevel) {
     const Comparison c = compare(input, extract_level(pm, level).mesh);
     EXPECT_LE(c.hausdorff, pm.level_error[level] * (1 + 1e-9)) << "level " << level;
   }
+}
+
+TEST(ProgressiveMesh, MeasuredLevelsPickWhatAViewerNeeds) {
+  const Mesh input = test::bumpy_sphere(3, 0.08);
+  ProgressiveOptions po;
+  po.measure_levels = true;
+  const ProgressiveMesh pm = build_progressive_mesh(input, po);
+  ASSERT_GE(pm.measured.size(), 5u);
+  EXPECT_EQ(pm.measured.front().level, 0);
+  EXPECT_EQ(pm.measured.back().level, pm.max_level());
+  EXPECT_EQ(pm.measured.back().hausdorff, 0.0);
+  CompareOptions co;
+  co.samples = 10000;  // what measure_levels() uses for an input this small
+  for (std::size_t i = 0; i + 1 < pm.measured.size(); ++i) {
+    const LevelMeasurement& m = pm.measured[i];
+    // Levels about sqrt(2) apart in faces; values are compare()'s (raised to stay monotone), within the bound.
+    EXPECT_LT(m.level, pm.measured[i + 1].level);
+    if (pm.measured[i + 1].level < pm.max_level()) {
+      EXPECT_LE(pm.num_faces(pm.measured[i + 1].level), std::ceil(1.4143 * pm.num_faces(m.level)));
+    }
+    EXPECT_GE(m.hausdorff, pm.measured[i + 1].hausdorff);
+    const Comparison c = compare(input, extract_level(pm, m.level, VertexOrder::Stream).mesh, co);
+    EXPECT_GE(m.hausdorff, c.hausdorff) << "level " << m.level;
+    EXPECT_DOUBLE_EQ(m.rms, c.rms) << "level " << m.level;
+    EXPECT_LE(m.hausdorff, pm.level_error[m.level] * (1 + 1e-9)) << "level " << m.level;
+    EXPECT_GT(m.hausdorff, 0.0);
+  }
+  // Between measured levels, a level takes the coarser one's value.
+  const LevelMeasurement& a = pm.measured[2];
+  EXPECT_EQ(level_error(pm, a.level, LevelErrorKind::Measured), std::min(a.hausdorff, pm.level_error[a.level]));
+  EXPECT_EQ(level_error(pm, pm.measured[3].level - 1, LevelErrorKind::Measured),
+            std::min(a.hausdorff, pm.level_error[pm.measured[3].level - 1]));
+  EXPECT_EQ(level_error(pm, a.level, LevelErrorKind::Bound), pm.level_error[a.level]);
+
+  // The level chosen by measured error is within budget by compare() and much coarser than the one the
+  // loose bound picks; the next coarser level is not within budget.
+  for (std::size_t i : {std::size_t(1), pm.measured.size() / 2, pm.measured.size() - 2}) {
+    const double budget = pm.measured[i].hausdorff;
+    const Index by_measure = level_for_error(pm, budget, LevelErrorKind::Measured);
+    const Index by_bound = level_for_error(pm, budget, LevelErrorKind::Bound);
+    EXPECT_LE(compare(input, extract_level(pm, by_measure).mesh, co).hausdorff, budget) << budget;
+    EXPECT_LE(pm.num_faces(by_measure), pm.num_faces(by_bound)) << budget;
+    if (i < pm.measured.size() - 2) {
+      EXPECT_LT(2 * pm.num_faces(by_measure), pm.num_faces(by_bound)) << budget;
+    }
+    if (by_measure > 0) {
+      EXPECT_GT(level_error(pm, by_measure - 1, LevelErrorKind::Measured), budget);
+    }
+  }
+  // A viewer at the distance where the middle measured level's error is one pixel.
+  const double radius = bounding_radius(pm), error = pm.measured[pm.measured.size() / 2].hausdorff;
+  const ScreenSpaceBudget view{1.0, radius + error * 1080.0 / (2 * std::tan(std::numbers::pi / 6)) * 1.001, 60.0, 1080.0};
+  const Index seen = level_for_view(pm, view, LevelErrorKind::Measured);
+  EXPECT_EQ(seen, pm.measured[pm.measured.size() / 2].level);
+  EXPECT_LE(projected_pixels(level_error(pm, seen, LevelErrorKind::Measured), radius, view), 1.0);
+  EXPECT_LT(2 * pm.num_faces(seen), pm.num_faces(level_for_view(pm, view)));
+  // Measuring against a different mesh is refused.
+  ProgressiveMesh other = build_progressive_mesh(input);
+  EXPECT_THROW(measure_levels(other, test::bumpy_sphere(2, 0.08)), Error);
 }
 
 TEST(ProgressiveMesh, BaseFacesStopsEarly) {

@@ -22,7 +22,7 @@ struct PmCliOptions {
   std::optional<std::string> format;
   std::optional<Index> base_faces;
   int quantize = 0;
-  bool draco = false, keep_order = false, json = false;
+  bool draco = false, keep_order = false, json = false, measure = false;
   Index block = 1024;
   std::vector<double> attribute_weights;
   // extract / geomorph
@@ -30,7 +30,7 @@ struct PmCliOptions {
   std::optional<double> ratio, pixel_error, alpha, max_error;
   double distance = 10.0, fov = 60.0, viewport = 1080.0;
   int frames = 0;
-  bool input_order = false;
+  bool input_order = false, certified = false;
   std::optional<Index> rows;
 };
 
@@ -45,8 +45,11 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
     p.simplify.attribute_weights = {o.attribute_weights[0], o.attribute_weights[1], o.attribute_weights[2]};
   }
   const auto start = std::chrono::steady_clock::now();
-  const ProgressiveMesh pm = build_progressive_mesh(mesh, p);
+  ProgressiveMesh pm = build_progressive_mesh(mesh, p);
   const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto t0 = std::chrono::steady_clock::now();
+  if (o.measure) measure_levels(pm, mesh);
+  const double measure_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   PmWriteOptions w;
   w.position_bits = o.quantize;
   w.draco_base = o.draco;
@@ -61,6 +64,7 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
                                       {"faces", mesh.num_faces()}, {"vertices", mesh.num_vertices()},
                                       {"base_faces", pm.num_faces(0)}, {"splits", pm.max_level()},
                                       {"build_seconds", build_seconds}, {"write_seconds", write_seconds},
+                                      {"measured_levels", pm.measured.size()}, {"measure_seconds", measure_seconds},
                                       {"bytes", stats.total_bytes}, {"base_bytes", stats.base_bytes},
                                       {"split_bytes", stats.split_bytes}, {"order_bytes", stats.order_bytes},
                                       {"bits_per_vertex", bits_per_vertex}, {"position_bits", o.quantize}}
@@ -68,6 +72,8 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   } else if (!global.quiet) {
     fmt::print(stderr, "pm build ({}): {} faces -> base of {} faces + {} splits in {:.3f} s\n", o.method,
                thousands(mesh.num_faces()), thousands(pm.num_faces(0)), thousands(pm.max_level()), build_seconds);
+    if (o.measure)
+      fmt::print(stderr, "  measured {} levels' distances to the input in {:.3f} s\n", pm.measured.size(), measure_seconds);
     fmt::print(stderr, "  {}: {} bytes ({:.1f} bits per input vertex; base {}, splits {}, order {}) written in {:.3f} s\n",
                o.output, thousands(static_cast<long long>(stats.total_bytes)), bits_per_vertex,
                thousands(static_cast<long long>(stats.base_bytes)), thousands(static_cast<long long>(stats.split_bytes)),
@@ -86,6 +92,7 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
   const ProgressiveMesh& pm = r.pm;
   const double diagonal = pm.bounds.isEmpty() ? 0.0 : pm.bounds.diagonal().norm();
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
+  const bool measured = !pm.measured.empty();
   // A table of about `rows` levels, spaced evenly in log(faces), always with the base and the top.
   const Index rows = std::max<Index>(2, o.rows.value_or(12));
   std::vector<Index> levels;
@@ -98,10 +105,19 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
   if (levels.back() != pm.max_level()) levels.push_back(pm.max_level());
   if (o.json) {
     nlohmann::json table = nlohmann::json::array();
-    for (Index l : levels)
-      table.push_back({{"level", l}, {"faces", pm.num_faces(l)}, {"vertices", pm.num_wedges(l)},
-                       {"error_bound", pm.level_error[static_cast<std::size_t>(l)]},
-                       {"error_bound_percent", pm.level_error[static_cast<std::size_t>(l)] * pct}});
+    for (Index l : levels) {
+      nlohmann::json row{{"level", l}, {"faces", pm.num_faces(l)}, {"vertices", pm.num_wedges(l)},
+                         {"error_bound", pm.level_error[static_cast<std::size_t>(l)]},
+                         {"error_bound_percent", pm.level_error[static_cast<std::size_t>(l)] * pct}};
+      if (measured) {
+        row["measured_error"] = level_error(pm, l, LevelErrorKind::Measured);
+        row["measured_error_percent"] = level_error(pm, l, LevelErrorKind::Measured) * pct;
+      }
+      table.push_back(row);
+    }
+    nlohmann::json ladder = nlohmann::json::array();
+    for (const LevelMeasurement& m : pm.measured)
+      ladder.push_back({{"level", m.level}, {"faces", pm.num_faces(m.level)}, {"hausdorff", m.hausdorff}, {"rms", m.rms}});
     fmt::print("{}\n", nlohmann::json{{"file", o.input}, {"bytes", r.bytes_read}, {"complete", r.complete},
                                       {"warning", r.warning}, {"position_bits", r.position_bits},
                                       {"splits", pm.max_level()}, {"base_faces", pm.num_faces(0)},
@@ -109,7 +125,7 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
                                       {"bits_per_vertex", 8.0 * double(r.bytes_read) / std::max<Index>(1, pm.num_wedges(pm.max_level()))},
                                       {"base_bytes", r.stats.base_bytes}, {"split_bytes", r.stats.split_bytes},
                                       {"order_bytes", r.stats.order_bytes}, {"input_order", pm.knows_input_order()},
-                                      {"diagonal", diagonal}, {"levels", table}}
+                                      {"diagonal", diagonal}, {"levels", table}, {"measured_levels", ladder}}
                            .dump(2));
     return 0;
   }
@@ -121,11 +137,22 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
              thousands(pm.num_faces(0)), thousands(pm.max_level()), thousands(pm.num_faces(pm.max_level())),
              thousands(pm.num_wedges(pm.max_level())), thousands(static_cast<long long>(r.stats.base_bytes)),
              thousands(static_cast<long long>(r.stats.split_bytes)));
-  fmt::print("  {:>9}  {:>11}  {:>11}  {:>13}  {:>9}\n", "level", "faces", "vertices", "error bound", "% diag");
-  for (Index l : levels)
-    fmt::print("  {:>9}  {:>11}  {:>11}  {:>13.6g}  {:>9.4f}\n", l, thousands(pm.num_faces(l)), thousands(pm.num_wedges(l)),
-               pm.level_error[static_cast<std::size_t>(l)], pm.level_error[static_cast<std::size_t>(l)] * pct);
+  fmt::print("  {:>9}  {:>11}  {:>11}  {:>13}  {:>9}{}\n", "level", "faces", "vertices", "error bound", "% diag",
+             measured ? fmt::format("  {:>13}  {:>9}", "measured", "% diag") : "");
+  for (Index l : levels) {
+    const double bound = pm.level_error[static_cast<std::size_t>(l)], m = level_error(pm, l, LevelErrorKind::Measured);
+    fmt::print("  {:>9}  {:>11}  {:>11}  {:>13.6g}  {:>9.4f}{}\n", l, thousands(pm.num_faces(l)), thousands(pm.num_wedges(l)),
+               bound, bound * pct, measured ? fmt::format("  {:>13.6g}  {:>9.4f}", m, m * pct) : "");
+  }
+  if (measured)
+    fmt::print("  measured: Hausdorff distance to the input at {} levels (by compare; a level between two takes the\n"
+               "  coarser one's); the bound is guaranteed, the measurement is what a viewer sees\n",
+               pm.measured.size());
   return 0;
+}
+
+LevelErrorKind selection_kind(const PmCliOptions& o, const ProgressiveMesh& pm) {
+  return o.certified || pm.measured.empty() ? LevelErrorKind::Bound : LevelErrorKind::Measured;
 }
 
 /// The level the selection options ask for, and a sentence saying why.
@@ -141,15 +168,18 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
     why = fmt::format("ratio {} = at most {} faces", *o.ratio, faces);
     return level_for_faces(pm, faces);
   }
+  // By the measured distance when the stream carries it, unless the guaranteed bound is asked for.
+  const LevelErrorKind kind = selection_kind(o, pm);
+  const char* what = kind == LevelErrorKind::Measured ? "measured error" : "error bound";
   if (o.max_error) {
-    why = fmt::format("error bound at most {}", *o.max_error);
-    return level_for_error(pm, *o.max_error);
+    why = fmt::format("{} at most {}", what, *o.max_error);
+    return level_for_error(pm, *o.max_error, kind);
   }
   const ScreenSpaceBudget view{*o.pixel_error, o.distance, o.fov, o.viewport};
-  const Index level = level_for_view(pm, view);
-  why = fmt::format("{} px budget at distance {}, fov {} deg, {} px viewport: bound projects to {:.3g} px", *o.pixel_error,
-                    o.distance, o.fov, o.viewport,
-                    projected_pixels(pm.level_error[static_cast<std::size_t>(level)], bounding_radius(pm), view));
+  const Index level = level_for_view(pm, view, kind);
+  why = fmt::format("{} px budget at distance {}, fov {} deg, {} px viewport: {} projects to {:.3g} px", *o.pixel_error,
+                    o.distance, o.fov, o.viewport, what,
+                    projected_pixels(level_error(pm, level, kind), bounding_radius(pm), view));
   return level;
 }
 
@@ -164,6 +194,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
     ro.max_ratio = o.ratio;
     ro.max_error = o.max_error;
     if (o.pixel_error) ro.view = ScreenSpaceBudget{*o.pixel_error, o.distance, o.fov, o.viewport};
+    ro.select_by = o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;  // measured if the stream has it
   }
   const auto start = std::chrono::steady_clock::now();
   const PmReadResult r = read_pm(o.input, ro);
@@ -174,15 +205,18 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_output(e.mesh, o.output, o.format, WriteOptions{}, o.input);
   const double bound = r.pm.level_error[static_cast<std::size_t>(level)];
+  const bool measured = !r.pm.measured.empty();
+  const double measured_error = level_error(r.pm, level, LevelErrorKind::Measured);
   if (o.json) {
-    fmt::print("{}\n", nlohmann::json{{"file", o.input}, {"output", o.output}, {"level", level},
-                                      {"faces", e.mesh.num_faces()}, {"vertices", e.mesh.num_vertices()},
-                                      {"error_bound", bound}, {"bytes_read", r.bytes_read}, {"seconds", seconds},
-                                      {"why", why}}
-                           .dump(2));
+    nlohmann::json j{{"file", o.input}, {"output", o.output}, {"level", level}, {"faces", e.mesh.num_faces()},
+                     {"vertices", e.mesh.num_vertices()}, {"error_bound", bound}, {"bytes_read", r.bytes_read},
+                     {"seconds", seconds}, {"why", why}};
+    if (measured) j["measured_error"] = measured_error;
+    fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
-    fmt::print(stderr, "pm extract: level {} of {}: {} faces, {} vertices, error bound {:.6g} ({}); read {} bytes, {:.1f} ms\n",
-               level, r.total_splits, thousands(e.mesh.num_faces()), thousands(e.mesh.num_vertices()), bound, why,
+    fmt::print(stderr, "pm extract: level {} of {}: {} faces, {} vertices, error bound {:.6g}{} ({}); read {} bytes, {:.1f} ms\n",
+               level, r.total_splits, thousands(e.mesh.num_faces()), thousands(e.mesh.num_vertices()), bound,
+               measured ? fmt::format(", measured {:.6g}", measured_error) : "", why,
                thousands(static_cast<long long>(r.bytes_read)), 1000 * seconds);
   }
   return 0;
@@ -245,6 +279,8 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::Range(0, 30))->capture_default_str();
   build->add_flag("--draco", opt->draco, "Compress the base mesh with Draco (needs --quantize)");
   build->add_flag("--keep-order", opt->keep_order, "Store the input order in a quantised stream too");
+  build->add_flag("--measure", opt->measure,
+                  "Measure levels' distances to the input (compare, levels 1.41x apart in faces) for selection");
   build->add_option("--block", opt->block, "Splits per checksummed block")->check(CLI::Range(1, 1 << 24))->capture_default_str();
   build->add_option("--attribute-weights", opt->attribute_weights, "Normal, UV and colour weights (quadric), e.g. 0,1,0")
       ->delimiter(',')->check(CLI::NonNegativeNumber);
@@ -254,7 +290,8 @@ same order); --quantize BITS gives a compact stream in stream order.
 Examples:
   lodkit pm build bunny.ply -o bunny.pm
   lodkit pm build scan.obj -o scan.pm --quantize 14 --draco --base-faces 500
-  lodkit pm build spot.obj -o spot.pm --attribute-weights 0,1,0)");
+  lodkit pm build spot.obj -o spot.pm --attribute-weights 0,1,0
+  lodkit pm build bunny.ply -o bunny.pm --measure   # pm extract --pixel-error then picks what a viewer needs)");
 
   CLI::App* info = pm->add_subcommand("info", "Levels, sizes and error bounds of a .pm file");
   info->add_option("input", opt->input, "A .pm file")->required();
@@ -276,9 +313,12 @@ Examples:
   extract->add_option("--fov", opt->fov, "Vertical field of view, degrees")->check(CLI::Range(0.01, 179.99))->capture_default_str();
   extract->add_option("--viewport", opt->viewport, "Viewport height, pixels")->check(CLI::PositiveNumber)->capture_default_str();
   extract->add_flag("--input-order", opt->input_order, "Vertices and faces in input order (reads the whole file)");
+  extract->add_flag("--certified", opt->certified, "Select by the guaranteed bound even when the stream has measured errors");
   extract->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   extract->footer(R"(pixels = error * viewport / (2 * d * tan(fov / 2)), d = distance - bounding radius.
-With --faces only the blocks that level needs are read.
+The error is the level's measured distance to the input when the stream was built with --measure
+(unless --certified), else its guaranteed bound, which is typically 10-60 times larger.
+Only the blocks the chosen level needs are read (all of them with --input-order).
 Examples:
   lodkit pm extract bunny.pm -o bunny_1k.ply --faces 1000
   lodkit pm extract bunny.pm -o half.obj --ratio 0.5 --input-order

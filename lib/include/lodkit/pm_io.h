@@ -37,7 +37,8 @@ struct PmWriteOptions {
 
 /// Where the bytes of a stream went.
 struct PmStreamStats {
-  std::size_t total_bytes = 0, header_bytes = 0, base_bytes = 0, split_bytes = 0, order_bytes = 0, extra_bytes = 0;
+  std::size_t total_bytes = 0, header_bytes = 0, base_bytes = 0, measured_bytes = 0, split_bytes = 0, order_bytes = 0,
+              extra_bytes = 0;
   Index split_blocks = 0;
 };
 
@@ -53,12 +54,14 @@ struct PmReadOptions {
   /// The same as a fraction of the finest level's faces (as the header announces them), rounded to
   /// the nearest count; with max_faces too, the smaller budget holds.
   std::optional<double> max_ratio{};
-  /// Stop at the coarsest level whose error bound is at most this: the level level_for_error() picks
-  /// from the whole stream, read without the finer splits.
+  /// Stop at the coarsest level whose error is at most this: the level level_for_error() picks from
+  /// the whole stream (with `select_by`), read without the finer splits.
   std::optional<double> max_error{};
-  /// Stop at the coarsest level whose bound projects within this view's pixel budget: the level
+  /// Stop at the coarsest level whose error projects within this view's pixel budget: the level
   /// level_for_view() picks from the whole stream.
   std::optional<ScreenSpaceBudget> view{};
+  /// What max_error and view are held to: the bound, or the measured distance when the stream has it.
+  LevelErrorKind select_by = LevelErrorKind::Bound;
   // With several budgets, the read stops at the coarsest of the levels they pick.
 };
 

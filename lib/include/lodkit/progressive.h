@@ -13,7 +13,11 @@
 // distance between M_i and M_n is at most the largest distance from an input vertex to its
 // representative's position in M_i. Each point keeps a bounding ball of the input vertices it stands
 // for, and `level_error[i]` is a running maximum of |position - centre| + radius: conservative, and
-// non-increasing as levels get finer.
+// non-increasing as levels get finer. It is guaranteed but loose: a point's ball grows with every
+// collapse, sideways along the surface as much as away from it, so the bound is typically 10-60 times
+// the distance `compare` measures. Screen-space selection from it models far more than a scene needs;
+// measure_levels() adds measured distances at levels spaced by a factor of sqrt(2) in faces, and
+// selection can go by those (LevelErrorKind::Measured).
 #include <lodkit/mesh.h>
 #include <lodkit/simplify.h>
 
@@ -23,6 +27,13 @@
 #include <vector>
 
 namespace lodkit {
+
+/// The Hausdorff distance and RMS distance between one level and the finest, measured by compare().
+struct LevelMeasurement {
+  Index level = 0;
+  double hausdorff = 0.0;
+  double rms = 0.0;
+};
 
 /// One vertex split: point `point` (s) splits into s and the new point t = base_points + index.
 struct VertexSplit {
@@ -71,6 +82,8 @@ struct ProgressiveMesh {
 
   /// Conservative Hausdorff bound between level i and the finest level, for i = 0 .. splits.size().
   std::vector<double> level_error;
+  /// Measured distances at some levels, by increasing level, or empty (see measure_levels()).
+  std::vector<LevelMeasurement> measured;
   /// The finest level's bounding box (for screen-space selection).
   Eigen::AlignedBox3d bounds;
 
@@ -105,10 +118,27 @@ struct ProgressiveOptions {
   SimplifyOptions simplify{};
   /// Stop collapsing at this many faces; by default go as far as legal collapses go.
   std::optional<Index> base_faces{};
+  /// Also measure the levels' distances to the input (measure_levels()): slower, but selection by error
+  /// or view can then pick the level a viewer actually needs.
+  bool measure_levels = false;
 };
 
 /// Builds the progressive mesh of `mesh`. \throw Error for an invalid mesh or options.
 ProgressiveMesh build_progressive_mesh(const Mesh& mesh, const ProgressiveOptions& options = {});
+
+struct MeasureLevelsOptions {
+  /// Levels whose face counts grow by this factor from the base are measured (and the finest level).
+  double face_factor = 1.4142135623730951;
+  /// Face samples per direction for compare(); 0: half the input's face count, at least 10,000
+  /// (compare() then refines around the worst samples, so the Hausdorff distance converges).
+  long long samples = 0;
+};
+
+/// Measures the Hausdorff and RMS distances between `input` (the mesh `pm` was built from) and levels
+/// of `pm`, and stores them in pm.measured. Each Hausdorff distance is raised to at least those of the
+/// finer measured levels, so the values do not increase with the level. \throw Error if `input` does
+/// not have the finest level's face count.
+void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsOptions& options = {});
 
 /// Checks the internal consistency of a progressive mesh (index ranges, counts). \throw Error.
 void validate(const ProgressiveMesh& pm, const std::string& context = "progressive mesh");
@@ -205,12 +235,20 @@ struct ScreenSpaceBudget {
 /// Infinite when the eye is inside the sphere.
 double projected_pixels(double error, double radius, const ScreenSpaceBudget& view);
 
+/// Which error selection goes by: the guaranteed bound, or the measured distance.
+enum class LevelErrorKind { Bound, Measured };
+
+/// The error of `level`. Measured: the Hausdorff distance measured at the nearest measured level at or
+/// below it (coarser; errors shrink with the level), never more than the bound; the bound itself when
+/// `pm` carries no measurements.
+double level_error(const ProgressiveMesh& pm, Index level, LevelErrorKind kind = LevelErrorKind::Bound);
+
 /// The finest level with at most `faces` faces (level 0 if even the base has more).
 Index level_for_faces(const ProgressiveMesh& pm, Index faces);
-/// The coarsest level whose error bound is at most `max_error` (the finest level if none is).
-Index level_for_error(const ProgressiveMesh& pm, double max_error);
-/// The coarsest level whose error bound projects to at most view.pixel_error pixels.
-Index level_for_view(const ProgressiveMesh& pm, const ScreenSpaceBudget& view);
+/// The coarsest level whose error is at most `max_error` (the finest level if none is).
+Index level_for_error(const ProgressiveMesh& pm, double max_error, LevelErrorKind kind = LevelErrorKind::Bound);
+/// The coarsest level whose error projects to at most view.pixel_error pixels.
+Index level_for_view(const ProgressiveMesh& pm, const ScreenSpaceBudget& view, LevelErrorKind kind = LevelErrorKind::Bound);
 /// The bounding sphere radius used by level_for_view (half the bounding box diagonal).
 double bounding_radius(const ProgressiveMesh& pm);
 

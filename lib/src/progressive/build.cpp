@@ -253,6 +253,7 @@ ProgressiveMesh build_progressive_mesh(const Mesh& mesh, const ProgressiveOption
     for (std::size_t i = 0; i < pm.extra_face_input.size(); ++i)
       pm.face_colours.row(static_cast<Index>(n + i)) = mesh.attributes.face_colours.row(pm.extra_face_input[i]);
   }
+  if (options.measure_levels) measure_levels(pm, mesh);
   return pm;
 }
 

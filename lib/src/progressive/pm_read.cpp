@@ -250,19 +250,42 @@ bool decode_base(std::string_view payload, const Header& h, StreamState& st, Pro
 
 namespace {
 
+/// The measured levels block: count, then per level its distance from the previous level (varint)
+/// and two doubles, Hausdorff and RMS. False unless levels increase within the stream and values are
+/// finite and not negative.
+bool decode_measured(std::string_view payload, const Header& h, std::vector<LevelMeasurement>& out) {
+  ByteReader r(payload.data(), payload.size());
+  std::uint64_t count = 0, level = 0;
+  if (!r.get_varint(count) || count > h.splits + 1) return false;
+  for (std::uint64_t i = 0; i < count; ++i) {
+    std::uint64_t step = 0;
+    LevelMeasurement m;
+    if (!r.get_varint(step) || !r.get(m.hausdorff) || !r.get(m.rms)) return false;
+    level += step;
+    if ((i > 0 && step == 0) || level > h.splits || !(m.hausdorff >= 0 && m.rms >= 0) || !std::isfinite(m.hausdorff) ||
+        !std::isfinite(m.rms))
+      return false;
+    m.level = static_cast<Index>(level);
+    out.push_back(m);
+  }
+  return r.at_end();
+}
+
 /// Where a prefix read stops: before the split that would exceed the face budget, or at the first
 /// level that is good enough for the error or view budget (levels' bounds do not increase).
 struct StopRule {
   std::optional<Index> max_faces;
   std::optional<double> max_error;
   std::optional<ScreenSpaceBudget> view;
+  LevelErrorKind kind = LevelErrorKind::Bound;
   double radius = 0;
 
   bool too_many(Index faces) const { return max_faces && faces > *max_faces; }
   /// The same tests as level_for_error() and level_for_view(), so the prefix ends at their level.
-  bool good_enough(double level_error) const {
-    return (max_error && level_error <= *max_error) ||
-           (view && projected_pixels(level_error, radius, *view) <= view->pixel_error);
+  bool good_enough(const ProgressiveMesh& pm) const {
+    if (!max_error && !view) return false;
+    const double error = level_error(pm, pm.max_level(), kind);
+    return (max_error && error <= *max_error) || (view && projected_pixels(error, radius, *view) <= view->pixel_error);
   }
 };
 
@@ -278,6 +301,7 @@ StopRule stop_rule(const PmReadOptions& options, const Header& h, const std::str
   if (options.max_error && !(*options.max_error >= 0))
     throw Error(fmt::format("{}: error budget must not be negative, got {}", name, *options.max_error));
   rule.max_error = options.max_error;
+  rule.kind = options.select_by;
   if (options.view) {
     if (!(options.view->pixel_error >= 0))
       throw Error(fmt::format("{}: pixel error must not be negative, got {}", name, options.view->pixel_error));
@@ -328,7 +352,7 @@ bool decode_block(std::string_view payload, const Header& h, StreamState& st, Pr
     return false;
   };
   for (std::uint32_t n = 0; n < count; ++n) {
-    if (rule.good_enough(pm.level_error.back())) {
+    if (rule.good_enough(pm)) {
       stopped = true;
       return true;
     }
@@ -539,17 +563,26 @@ PmReadResult read_stream(Source& src, const std::string& name, const PmReadOptio
   result.stats.base_bytes = src.consumed() - kHeaderSize;
 
   // Only while splits remain: the blocks after them (input order, extras) belong to a whole read.
-  bool stopped = h.splits > 0 && (rule.too_many(pm.num_faces(0)) || rule.good_enough(pm.level_error[0]));
+  bool stopped = h.splits > 0 && (rule.too_many(pm.num_faces(0)) || rule.good_enough(pm));
   bool order_seen = false;
   while (!stopped) {
-    if (pm.splits.size() < h.splits && rule.good_enough(pm.level_error.back())) break;  // before the next block
+    if (pm.splits.size() < h.splits && rule.good_enough(pm)) break;  // before the next block
     const std::size_t before = src.consumed();
     if (!read_chunk(type)) {
       result.warning = fmt::format("{}: {} after {} of {} splits; using levels 0..{}", name, why, pm.splits.size(), h.splits,
                                    pm.splits.size());
       break;
     }
-    if (type == kSplits) {
+    if (type == kMeasured) {
+      std::vector<LevelMeasurement> measured;
+      if (!pm.splits.empty() || !pm.measured.empty() || !decode_measured(payload, h, measured)) {
+        result.warning = fmt::format("{}: bad measured-levels block; selection goes by the bounds", name);
+        continue;  // the splits after it are intact (their blocks have their own checksums)
+      }
+      for (LevelMeasurement& m : measured) m.hausdorff += slack;  // as for the bounds
+      pm.measured = std::move(measured);
+      result.stats.measured_bytes = src.consumed() - before;
+    } else if (type == kSplits) {
       if (pm.splits.size() >= h.splits || order_seen) {
         result.warning = fmt::format("{}: unexpected split block; using levels 0..{}", name, pm.splits.size());
         break;
@@ -640,6 +673,8 @@ PmReadResult read_stream(Source& src, const std::string& name, const PmReadOptio
   if (order_seen && (!result.complete || pm.extra_vertex_input.size() + pm.wedge_input.size() != static_cast<std::size_t>(pm.input_vertices))) {
     pm.wedge_input.clear(), pm.face_input.clear();  // half an order is no order
   }
+  // A prefix holds the measurements of its own levels.
+  std::erase_if(pm.measured, [&](const LevelMeasurement& m) { return m.level > pm.max_level(); });
   result.bytes_read = src.consumed();
   result.stats.total_bytes = result.bytes_read;
   validate(pm, name);

@@ -19,7 +19,7 @@ namespace lodkit::detail::pm {
 static_assert(std::endian::native == std::endian::little, "the .pm codec assumes a little-endian host");
 
 inline constexpr char kMagic[8] = {'L', 'K', 'P', 'M', '\r', '\n', '\x1a', '\n'};
-inline constexpr std::uint16_t kVersion = 2;  // 2: moved-corner bits against the fan prediction
+inline constexpr std::uint16_t kVersion = 3;  // 2: moved-corner bits against the fan prediction; 3: measured levels
 inline constexpr std::uint16_t kOldestVersion = 1;
 inline constexpr std::size_t kHeaderSize = 100;  // including its CRC
 
@@ -36,7 +36,14 @@ enum Flag : std::uint16_t {
 /// How the base mesh is stored.
 enum BaseKind : std::uint8_t { kRawBase = 0, kQuantisedBase = 1, kDracoMeshBase = 2 };
 
-enum Chunk : std::uint8_t { kBase = 'B', kSplits = 'S', kOrderChunk = 'O', kExtras = 'X', kEnd = 'E' };
+enum Chunk : std::uint8_t {
+  kBase = 'B',
+  kMeasured = 'M',  // version 3 on, optional, between the base and the first split block
+  kSplits = 'S',
+  kOrderChunk = 'O',
+  kExtras = 'X',
+  kEnd = 'E',
+};
 
 std::uint32_t crc32(const void* data, std::size_t n, std::uint32_t crc = 0);
 

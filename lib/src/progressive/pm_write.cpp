@@ -327,6 +327,21 @@ std::string write_pm_to_memory(const ProgressiveMesh& pm, const PmWriteOptions& 
   stats.header_bytes = out.size();
   put_chunk(out, kBase, base);
   stats.base_bytes = out.size() - stats.header_bytes;
+  if (!pm.measured.empty()) {
+    // Before the splits, so that a reader choosing a level by measured error knows where to stop.
+    ByteWriter m;
+    m.put_varint(pm.measured.size());
+    Index previous = 0;
+    for (const LevelMeasurement& level : pm.measured) {
+      m.put_varint(static_cast<std::uint64_t>(level.level - previous));
+      m.put(level.hausdorff);
+      m.put(level.rms);
+      previous = level.level;
+    }
+    const std::size_t before = out.size();
+    put_chunk(out, kMeasured, m.str());
+    stats.measured_bytes = out.size() - before;
+  }
 
   std::uint16_t last_code = error_code(pm.level_error[0], h.reference());
   for (std::size_t first = 0; first < pm.splits.size(); first += static_cast<std::size_t>(o.splits_per_block)) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
+#include <iterator>
 #include <limits>
 #include <numbers>
 
@@ -37,18 +38,28 @@ Index level_for_faces(const ProgressiveMesh& pm, Index faces) {
   return lo;
 }
 
-Index level_for_error(const ProgressiveMesh& pm, double max_error) {
-  if (!(max_error >= 0)) throw Error(fmt::format("progressive mesh: error budget must not be negative, got {}", max_error));
-  // Bounds do not increase with the level: the first level within budget is the coarsest.
-  const auto it = std::find_if(pm.level_error.begin(), pm.level_error.end(), [&](double e) { return e <= max_error; });
-  return it == pm.level_error.end() ? pm.max_level() : static_cast<Index>(it - pm.level_error.begin());
+double level_error(const ProgressiveMesh& pm, Index level, LevelErrorKind kind) {
+  const double bound = pm.level_error[static_cast<std::size_t>(level)];
+  if (kind == LevelErrorKind::Bound || pm.measured.empty()) return bound;
+  // The last measurement at or below `level`; before the first one, nothing better than the bound.
+  const auto after = std::upper_bound(pm.measured.begin(), pm.measured.end(), level,
+                                      [](Index l, const LevelMeasurement& m) { return l < m.level; });
+  return after == pm.measured.begin() ? bound : std::min(bound, std::prev(after)->hausdorff);
 }
 
-Index level_for_view(const ProgressiveMesh& pm, const ScreenSpaceBudget& view) {
+Index level_for_error(const ProgressiveMesh& pm, double max_error, LevelErrorKind kind) {
+  if (!(max_error >= 0)) throw Error(fmt::format("progressive mesh: error budget must not be negative, got {}", max_error));
+  // Errors do not increase with the level: the first level within budget is the coarsest.
+  for (Index level = 0; level <= pm.max_level(); ++level)
+    if (level_error(pm, level, kind) <= max_error) return level;
+  return pm.max_level();
+}
+
+Index level_for_view(const ProgressiveMesh& pm, const ScreenSpaceBudget& view, LevelErrorKind kind) {
   if (!(view.pixel_error >= 0)) throw Error(fmt::format("screen-space budget: pixel error must not be negative, got {}", view.pixel_error));
   const double radius = bounding_radius(pm);
   for (Index level = 0; level <= pm.max_level(); ++level)
-    if (projected_pixels(pm.level_error[static_cast<std::size_t>(level)], radius, view) <= view.pixel_error) return level;
+    if (projected_pixels(level_error(pm, level, kind), radius, view) <= view.pixel_error) return level;
   return pm.max_level();
 }
 
@@ -99,6 +110,13 @@ void validate(const ProgressiveMesh& pm, const std::string& context) {
           static_cast<std::size_t>(a.first_value) + 2 * dims > pm.attribute_values.size())
         fail(fmt::format("split {}: an invalid attribute change", j));
     }
+  }
+  for (std::size_t i = 0; i < pm.measured.size(); ++i) {
+    const LevelMeasurement& m = pm.measured[i];
+    if (m.level < 0 || m.level > pm.max_level() || (i > 0 && m.level <= pm.measured[i - 1].level))
+      fail(fmt::format("measured level {} is out of order or range", m.level));
+    if (!(m.hausdorff >= 0 && m.rms >= 0 && std::isfinite(m.hausdorff) && std::isfinite(m.rms)))
+      fail(fmt::format("measured level {} has an invalid distance", m.level));
   }
   if (pm.knows_input_order() && (pm.wedge_input.size() != nw || pm.face_input.size() != nf))
     fail("the input order does not cover every wedge and face");

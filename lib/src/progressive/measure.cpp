@@ -1,0 +1,45 @@
+// measure_levels(): the distance from levels of a progressive mesh to its input, by compare(), at
+// levels spaced geometrically in faces, so that selection can go by what a viewer would see.
+#include <lodkit/error.h>
+#include <lodkit/metrics.h>
+#include <lodkit/progressive.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+
+namespace lodkit {
+
+void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsOptions& options) {
+  if (!(options.face_factor > 1)) throw Error(fmt::format("measure levels: face factor must exceed 1, got {}", options.face_factor));
+  if (options.samples < 0) throw Error(fmt::format("measure levels: sample count must not be negative, got {}", options.samples));
+  const Index finest = pm.max_level();
+  if (pm.num_faces(finest) != input.num_faces() - pm.extra_faces.rows())
+    throw Error(fmt::format("measure levels: the input has {} faces, the progressive mesh's finest level {}",
+                            input.num_faces(), pm.num_faces(finest) + pm.extra_faces.rows()));
+  CompareOptions co;
+  co.samples = options.samples > 0 ? options.samples : std::max<long long>(10000, input.num_faces() / 2);
+
+  // Level 0, then each level with factor times the faces of the last one measured; the finest level
+  // is the input's surface (only unused vertices and degenerate faces differ): zero.
+  std::vector<LevelMeasurement> measured;
+  PMCursor cursor(pm);
+  Index level = 0;
+  while (level < finest) {
+    if (pm.num_faces(level) > 0) {  // a level without faces has no distance (its bound stands)
+      cursor.go_to(level);
+      const Comparison c = compare(input, cursor.extract(VertexOrder::Stream).mesh, co);
+      measured.push_back({level, c.hausdorff, c.rms});
+    }
+    const double next_faces = std::ceil(double(pm.num_faces(level)) * options.face_factor);
+    const Index next = level_for_faces(pm, static_cast<Index>(std::min(next_faces, 2e9)));
+    level = std::max(level + 1, next);
+  }
+  measured.push_back({finest, 0.0, 0.0});
+  // Sampling can find a finer level a hair farther than a coarser one: keep the values monotone.
+  for (std::size_t i = measured.size() - 1; i-- > 0;)
+    measured[i].hausdorff = std::max(measured[i].hausdorff, measured[i + 1].hausdorff);
+  pm.measured = std::move(measured);
+}
+
+}  // namespace lodkit
