@@ -317,7 +317,7 @@ Examples:
   extract->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   extract->footer(R"(pixels = error * viewport / (2 * d * tan(fov / 2)), d = distance - bounding radius.
 The error is the level's measured distance to the input when the stream was built with --measure
-(unless --certified), else its guaranteed bound, which is typically 10-60 times larger.
+(unless --certified), else its guaranteed bound, which is 4-50 times larger on the bunny.
 Only the blocks the chosen level needs are read (all of them with --input-order).
 Examples:
   lodkit pm extract bunny.pm -o bunny_1k.ply --faces 1000

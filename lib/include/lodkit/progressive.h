@@ -14,7 +14,7 @@
 // representative's position in M_i. Each point keeps a bounding ball of the input vertices it stands
 // for, and `level_error[i]` is a running maximum of |position - centre| + radius: conservative, and
 // non-increasing as levels get finer. It is guaranteed but loose: a point's ball grows with every
-// collapse, sideways along the surface as much as away from it, so the bound is typically 10-60 times
+// collapse, sideways along the surface as much as away from it, so the bound is 4-50 times (on the bunny)
 // the distance `compare` measures. Screen-space selection from it models far more than a scene needs;
 // measure_levels() adds measured distances at levels spaced by a factor of sqrt(2) in faces, and
 // selection can go by those (LevelErrorKind::Measured).
