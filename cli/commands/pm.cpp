@@ -110,8 +110,9 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
                          {"error_bound", pm.level_error[static_cast<std::size_t>(l)]},
                          {"error_bound_percent", pm.level_error[static_cast<std::size_t>(l)] * pct}};
       if (measured) {
-        row["measured_error"] = level_error(pm, l, LevelErrorKind::Measured);
-        row["measured_error_percent"] = level_error(pm, l, LevelErrorKind::Measured) * pct;
+        const double m = level_error(pm, l, LevelErrorKind::Measured);
+        row["measured_error"] = m;
+        row["measured_error_percent"] = m * pct;
       }
       table.push_back(row);
     }
@@ -151,8 +152,9 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
   return 0;
 }
 
-LevelErrorKind selection_kind(const PmCliOptions& o, const ProgressiveMesh& pm) {
-  return o.certified || pm.measured.empty() ? LevelErrorKind::Bound : LevelErrorKind::Measured;
+/// By the measured distance (the bound where the stream has none), unless the bound is asked for.
+LevelErrorKind selection_kind(const PmCliOptions& o) {
+  return o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;
 }
 
 /// The level the selection options ask for, and a sentence saying why.
@@ -168,9 +170,8 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
     why = fmt::format("ratio {} = at most {} faces", *o.ratio, faces);
     return level_for_faces(pm, faces);
   }
-  // By the measured distance when the stream carries it, unless the guaranteed bound is asked for.
-  const LevelErrorKind kind = selection_kind(o, pm);
-  const char* what = kind == LevelErrorKind::Measured ? "measured error" : "error bound";
+  const LevelErrorKind kind = selection_kind(o);
+  const char* what = kind == LevelErrorKind::Measured && !pm.measured.empty() ? "measured error" : "error bound";
   if (o.max_error) {
     why = fmt::format("{} at most {}", what, *o.max_error);
     return level_for_error(pm, *o.max_error, kind);
@@ -194,7 +195,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
     ro.max_ratio = o.ratio;
     ro.max_error = o.max_error;
     if (o.pixel_error) ro.view = ScreenSpaceBudget{*o.pixel_error, o.distance, o.fov, o.viewport};
-    ro.select_by = o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;  // measured if the stream has it
+    ro.select_by = selection_kind(o);
   }
   const auto start = std::chrono::steady_clock::now();
   const PmReadResult r = read_pm(o.input, ro);

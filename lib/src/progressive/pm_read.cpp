@@ -278,14 +278,14 @@ struct StopRule {
   std::optional<double> max_error;
   std::optional<ScreenSpaceBudget> view;
   LevelErrorKind kind = LevelErrorKind::Bound;
-  double radius = 0;
 
   bool too_many(Index faces) const { return max_faces && faces > *max_faces; }
   /// The same tests as level_for_error() and level_for_view(), so the prefix ends at their level.
   bool good_enough(const ProgressiveMesh& pm) const {
     if (!max_error && !view) return false;
     const double error = level_error(pm, pm.max_level(), kind);
-    return (max_error && error <= *max_error) || (view && projected_pixels(error, radius, *view) <= view->pixel_error);
+    return (max_error && error <= *max_error) ||
+           (view && projected_pixels(error, bounding_radius(pm), *view) <= view->pixel_error);
   }
 };
 
@@ -306,11 +306,8 @@ StopRule stop_rule(const PmReadOptions& options, const Header& h, const std::str
     if (!(options.view->pixel_error >= 0))
       throw Error(fmt::format("{}: pixel error must not be negative, got {}", name, options.view->pixel_error));
     rule.view = options.view;
-    const Eigen::AlignedBox3d bounds(Eigen::Vector3d(h.box_min[0], h.box_min[1], h.box_min[2]),
-                                     Eigen::Vector3d(h.box_max[0], h.box_max[1], h.box_max[2]));
-    rule.radius = bounds.isEmpty() ? 0.0 : 0.5 * bounds.diagonal().norm();  // as bounding_radius()
     try {
-      projected_pixels(0.0, rule.radius, *rule.view);  // checks the field of view and viewport
+      projected_pixels(0.0, 0.0, *rule.view);  // checks the field of view and viewport before reading
     } catch (const Error& e) {
       throw Error(fmt::format("{}: {}", name, e.what()));
     }
@@ -563,7 +560,7 @@ PmReadResult read_stream(Source& src, const std::string& name, const PmReadOptio
   result.stats.base_bytes = src.consumed() - kHeaderSize;
 
   // Only while splits remain: the blocks after them (input order, extras) belong to a whole read.
-  bool stopped = h.splits > 0 && (rule.too_many(pm.num_faces(0)) || rule.good_enough(pm));
+  bool stopped = h.splits > 0 && rule.too_many(pm.num_faces(0));
   bool order_seen = false;
   while (!stopped) {
     if (pm.splits.size() < h.splits && rule.good_enough(pm)) break;  // before the next block
