@@ -74,6 +74,55 @@ TEST(Compare, SameAnswerForAnyThreadCount) {
   EXPECT_EQ(one.a_to_b.normal_deviation_mean_deg, many.a_to_b.normal_deviation_mean_deg);
 }
 
+void expect_same(const DirectedDistance& x, const DirectedDistance& y) {
+  EXPECT_EQ(x.max, y.max);
+  EXPECT_EQ(x.mean, y.mean);
+  EXPECT_EQ(x.rms, y.rms);
+  EXPECT_EQ(x.normal_deviation_mean_deg, y.normal_deviation_mean_deg);
+  EXPECT_EQ(x.normal_deviation_max_deg, y.normal_deviation_max_deg);
+  EXPECT_EQ(x.samples, y.samples);
+}
+
+TEST(Compare, AReferenceMeasuresEveryMeshAsCompareDoes) {
+  const Mesh reference = make_icosphere({.subdivisions = 3});
+  Mesh with_debris = make_uv_sphere({.segments = 16, .rings = 8});
+  with_debris.positions.conservativeResize(with_debris.num_vertices() + 1, 3);
+  with_debris.positions.row(with_debris.num_vertices() - 1) << 5, 5, 5;  // unreferenced, far away
+  with_debris.triangles.conservativeResize(with_debris.num_faces() + 1, 3);
+  with_debris.triangles.row(with_debris.num_faces() - 1) << 0, 0, 1;  // degenerate
+  Mesh open = make_grid({.size = {2, 2}, .divisions_x = 6, .divisions_y = 6});
+  const CompareReference measurer(reference, 20000);
+  for (const Mesh& other : {make_uv_sphere({.segments = 24, .rings = 12}), make_box({}), with_debris, open}) {
+    CompareOptions o;
+    o.samples = 20000;
+    const Comparison direct = compare(reference, other, o), shared = measurer.compare(other);
+    expect_same(direct.a_to_b, shared.a_to_b);
+    expect_same(direct.b_to_a, shared.b_to_a);
+    EXPECT_EQ(direct.hausdorff, shared.hausdorff);
+    EXPECT_EQ(direct.rms, shared.rms);
+    EXPECT_EQ(direct.diagonal, shared.diagonal);
+    // Fewer samples on the other mesh leave the reference's direction as it was.
+    const Comparison sparse = measurer.compare(other, 2000);
+    expect_same(direct.a_to_b, sparse.a_to_b);
+    EXPECT_LT(sparse.b_to_a.samples, direct.b_to_a.samples);
+    EXPECT_NEAR(sparse.b_to_a.rms, direct.b_to_a.rms, 0.05 * direct.b_to_a.rms);
+  }
+  EXPECT_THROW(measurer.compare(Mesh{}), Error);
+  EXPECT_THROW(measurer.compare(open, 0), Error);
+  EXPECT_THROW(CompareReference(Mesh{}, 100), Error);
+  EXPECT_THROW(CompareReference(reference, 0), Error);
+}
+
+TEST(Compare, CountsEveryCornerAndEdgeOfEveryFace) {
+  // Corners and edge midpoints shared by faces are measured once but counted, and refined, per face.
+  const Mesh a = make_torus({.major_segments = 12, .minor_segments = 6});
+  CompareOptions o;
+  o.samples = 5000;
+  o.refine_rounds = 0;
+  const Comparison c = compare(a, a, o);
+  EXPECT_EQ(c.a_to_b.samples, 6LL * a.num_faces() + 5000);
+}
+
 TEST(Compare, RefusesEmptyMeshes) { EXPECT_THROW(compare(Mesh{}, make_box({})), Error); }
 
 }  // namespace

@@ -11,6 +11,7 @@
 // identical for any thread count.
 #include <lodkit/mesh.h>
 
+#include <memory>
 #include <optional>
 
 namespace lodkit {
@@ -45,6 +46,27 @@ struct Comparison {
 
 /// \throw Error if either mesh has no faces.
 Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options = {});
+
+/// One mesh compared with many (the levels of a progressive mesh, a sweep of simplifications): its
+/// samples and its tree are made once. `compare(other)` gives, bit for bit, what
+/// compare(reference, other, options) gives with options.samples = face_samples; `other` can also be
+/// sampled more sparsely (a coarse mesh needs fewer samples than its dense reference). Keeps a
+/// reference to `reference`, which must outlive it.
+class CompareReference {
+ public:
+  /// \throw Error if `reference` has no faces or face_samples is not positive.
+  CompareReference(const Mesh& reference, long long face_samples, const CompareOptions& options = {});
+  ~CompareReference();
+  CompareReference(const CompareReference&) = delete;
+  CompareReference& operator=(const CompareReference&) = delete;
+  /// `other_face_samples`: face samples on `other` (default: face_samples).
+  /// \throw Error if `other` has no faces or other_face_samples is not positive.
+  Comparison compare(const Mesh& other, std::optional<long long> other_face_samples = {}) const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 /// Faces of `mesh` whose normal points against the normal of the face of `reference` nearest to
 /// their centroid: the "flipped faces" of simplification benchmarks.

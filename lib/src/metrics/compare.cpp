@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fmt/format.h>
+#include <limits>
 #include <numbers>
 #include <tbb/parallel_for.h>
 #include <vector>
@@ -13,10 +15,27 @@
 namespace lodkit {
 namespace {
 
-struct Sample {
-  Eigen::Vector3d point;
-  Index face;     // face of the sampled mesh the point lies on
-  double weight;  // area represented (0 for vertex and edge samples: they count for the maximum only)
+// A surface's samples. Vertex and edge-midpoint samples repeat in every face around them; each
+// distinct point is measured once and its distance shared by the samples at it (a third of the
+// queries on a closed mesh). Samples keep their faces, so refinement sees every face around a worst
+// point, as when each was measured on its own.
+struct SampleSet {
+  struct Point {
+    Eigen::Vector3d position;
+    Index face;  // the face of the sample that introduced the point: its normal is compared
+  };
+  struct Sample {
+    std::uint32_t point;
+    Index face;     // face of the sampled mesh the sample lies on
+    double weight;  // area represented (0 for vertex and edge samples: they count for the maximum only)
+  };
+  std::vector<Point> points;
+  std::vector<Sample> samples;
+
+  void add_unique(const Eigen::Vector3d& p, Index f, double weight) {
+    samples.push_back({static_cast<std::uint32_t>(points.size()), f, weight});
+    points.push_back({p, f});
+  }
 };
 
 Eigen::Vector3d corner(const Mesh& m, Index f, int k) { return m.positions.row(m.triangles(f, k)); }
@@ -28,34 +47,65 @@ Eigen::Vector3d face_normal(const Mesh& m, Index f) {
 }
 
 // k stratified points inside face f: the R2 sequence folded into the triangle.
-void sample_face(const Mesh& m, Index f, long long k, double weight, std::vector<Sample>& out) {
+void sample_face(const Mesh& m, Index f, long long k, double weight, SampleSet& out) {
   const Eigen::Vector3d a = corner(m, f, 0), b = corner(m, f, 1), c = corner(m, f, 2);
   constexpr double g1 = 0.7548776662466927, g2 = 0.5698402909980532;  // R2 (plastic number)
   for (long long j = 0; j < k; ++j) {
     double u = std::fmod(0.5 + g1 * static_cast<double>(j + 1), 1.0);
     double v = std::fmod(0.5 + g2 * static_cast<double>(j + 1), 1.0);
     if (u + v > 1) u = 1 - u, v = 1 - v;
-    out.push_back({a + u * (b - a) + v * (c - a), f, weight / static_cast<double>(k)});
+    out.add_unique(a + u * (b - a) + v * (c - a), f, weight / static_cast<double>(k));
   }
 }
 
-std::vector<Sample> sample_surface(const Mesh& m, long long face_samples) {
-  std::vector<Sample> out;
+// Every face's corners and edge midpoints, in face order, each distinct vertex or edge measured once.
+void sample_vertices_and_edges(const Mesh& m, SampleSet& out) {
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  const Index nv = m.num_vertices(), nf = m.num_faces();
+  std::vector<std::uint32_t> vertex_point(static_cast<std::size_t>(nv), kNone);
+  // Edges grouped by their lower vertex: slots [first[lo], first[lo + 1]), filled[lo] of them in use.
+  std::vector<std::uint32_t> first(static_cast<std::size_t>(nv) + 1, 0), filled(static_cast<std::size_t>(nv), 0);
+  for (Index f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) ++first[std::min(m.triangles(f, k), m.triangles(f, (k + 1) % 3)) + 1];
+  for (Index v = 0; v < nv; ++v) first[v + 1] += first[v];
+  std::vector<std::pair<Index, std::uint32_t>> edge_point(first.back());  // (upper vertex, point)
+  for (Index f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Index a = m.triangles(f, k), b = m.triangles(f, (k + 1) % 3);
+      if (vertex_point[a] == kNone) {
+        vertex_point[a] = static_cast<std::uint32_t>(out.points.size());
+        out.points.push_back({corner(m, f, k), f});
+      }
+      out.samples.push_back({vertex_point[a], f, 0.0});
+      const Index lo = std::min(a, b), hi = std::max(a, b);
+      auto* const begin = &edge_point[first[lo]];
+      auto* const end = begin + filled[lo];
+      auto* const found = std::find_if(begin, end, [hi](const auto& e) { return e.first == hi; });
+      if (found == end) {
+        *end = {hi, static_cast<std::uint32_t>(out.points.size())};
+        ++filled[lo];
+        // 0.5 (p + q) is the same double whichever way round the edge is met.
+        out.points.push_back({0.5 * (corner(m, f, k) + corner(m, f, (k + 1) % 3)), f});
+      }
+      out.samples.push_back({found == end ? end->second : found->second, f, 0.0});
+    }
+}
+
+SampleSet sample_surface(const Mesh& m, long long face_samples) {
   const Index nf = m.num_faces();
+  if (6 * static_cast<long long>(nf) + std::max<long long>(face_samples, nf) >= std::numeric_limits<std::uint32_t>::max())
+    throw Error(fmt::format("compare: too many samples ({} faces, {} face samples)", nf, face_samples));
   std::vector<double> area(static_cast<std::size_t>(nf));
   double total = 0;
   for (Index f = 0; f < nf; ++f) {
     area[f] = 0.5 * (corner(m, f, 1) - corner(m, f, 0)).cross(corner(m, f, 2) - corner(m, f, 0)).norm();
     total += area[f];
   }
-  out.reserve(static_cast<std::size_t>(face_samples + 4 * nf));
+  SampleSet out;
+  out.samples.reserve(static_cast<std::size_t>(face_samples + 7 * nf));
+  out.points.reserve(static_cast<std::size_t>(face_samples + 3 * nf));
   // Vertices and edge points: where maxima of piecewise-linear distances often sit.
-  for (Index f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d p = corner(m, f, k), q = corner(m, f, (k + 1) % 3);
-      out.push_back({p, f, 0.0});
-      out.push_back({0.5 * (p + q), f, 0.0});
-    }
+  sample_vertices_and_edges(m, out);
   // Face interiors, allotted by area with a running remainder so the total is exact.
   double carry = 0;
   for (Index f = 0; f < nf; ++f) {
@@ -72,15 +122,16 @@ struct Measured {
   double distance, angle_deg;
 };
 
-std::vector<Measured> measure(const std::vector<Sample>& samples, const Mesh& from, const Mesh& to,
-                              const detail::AabbTree& tree) {
-  std::vector<Measured> result(samples.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 1024), [&](const auto& range) {
+// Each distinct point's distance to `to`, and the angle between its face's normal and the normal of
+// the face it is closest to.
+std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh& to, const detail::AabbTree& tree) {
+  std::vector<Measured> result(set.points.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.points.size(), 1024), [&](const auto& range) {
     Index hint = -1;
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const auto hit = tree.closest(samples[i].point, hint);
+      const auto hit = tree.closest(set.points[i].position, hint);
       hint = hit.face;
-      const Eigen::Vector3d n0 = face_normal(from, samples[i].face), n1 = face_normal(to, hit.face);
+      const Eigen::Vector3d n0 = face_normal(from, set.points[i].face), n1 = face_normal(to, hit.face);
       // atan2 keeps small angles accurate where acos(dot) would lose them.
       result[i] = {std::sqrt(hit.squared_distance), std::atan2(n0.cross(n1).norm(), n0.dot(n1)) * 180.0 / std::numbers::pi};
     }
@@ -88,60 +139,104 @@ std::vector<Measured> measure(const std::vector<Sample>& samples, const Mesh& fr
   return result;
 }
 
-DirectedDistance directed(const Mesh& from, const Mesh& to, long long face_samples, const CompareOptions& o) {
-  const detail::AabbTree tree(to);
-  std::vector<Sample> samples = sample_surface(from, face_samples);
-  std::vector<Measured> measured = measure(samples, from, to, tree);
+DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh& to, const detail::AabbTree& tree,
+                          const CompareOptions& o) {
+  std::vector<Measured> measured = measure(sampled, from, to, tree);
+  const std::vector<SampleSet::Sample>* samples = &sampled.samples;
 
   DirectedDistance d;
   double weight = 0, sum = 0, sum2 = 0, angle_sum = 0;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    d.max = std::max(d.max, measured[i].distance);
-    const double w = samples[i].weight;
+  for (const SampleSet::Sample& s : *samples) {
+    const Measured& m = measured[s.point];
+    d.max = std::max(d.max, m.distance);
+    const double w = s.weight;
     // Normals are compared at face samples only: at a vertex or on an edge the nearest face is ambiguous.
-    if (w > 0) d.normal_deviation_max_deg = std::max(d.normal_deviation_max_deg, measured[i].angle_deg);
+    if (w > 0) d.normal_deviation_max_deg = std::max(d.normal_deviation_max_deg, m.angle_deg);
     weight += w;
-    sum += w * measured[i].distance;
-    sum2 += w * measured[i].distance * measured[i].distance;
-    angle_sum += w * measured[i].angle_deg;
+    sum += w * m.distance;
+    sum2 += w * m.distance * m.distance;
+    angle_sum += w * m.angle_deg;
   }
   if (weight > 0) {
     d.mean = sum / weight;
     d.rms = std::sqrt(sum2 / weight);
     d.normal_deviation_mean_deg = angle_sum / weight;
   }
-  d.samples = static_cast<long long>(samples.size());
+  d.samples = static_cast<long long>(samples->size());
 
   // Refine around the worst samples: resample their faces 256x more densely until the maximum settles.
+  SampleSet dense;
   for (int round = 0; round < o.refine_rounds; ++round) {
-    std::vector<std::size_t> order(samples.size());
+    auto distance = [&](std::size_t i) { return measured[(*samples)[i].point].distance; };
+    std::vector<std::size_t> order(samples->size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
     const std::size_t top = std::min<std::size_t>(order.size(), 64);
     std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(top), order.end(),
                       [&](std::size_t a, std::size_t b) {
-                        return measured[a].distance != measured[b].distance ? measured[a].distance > measured[b].distance
-                                                                             : a < b;
+                        return distance(a) != distance(b) ? distance(a) > distance(b) : a < b;
                       });
     std::vector<Index> faces;
-    for (std::size_t i = 0; i < top; ++i) faces.push_back(samples[order[i]].face);
+    for (std::size_t i = 0; i < top; ++i) faces.push_back((*samples)[order[i]].face);
     std::sort(faces.begin(), faces.end());
     faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-    std::vector<Sample> dense;
-    for (Index f : faces) sample_face(from, f, 256, 0.0, dense);
-    const std::vector<Measured> dm = measure(dense, from, to, tree);
+    SampleSet next;
+    for (Index f : faces) sample_face(from, f, 256, 0.0, next);
+    const std::vector<Measured> dm = measure(next, from, to, tree);
     double new_max = d.max;
     for (const Measured& m : dm) new_max = std::max(new_max, m.distance);
-    d.samples += static_cast<long long>(dense.size());
+    d.samples += static_cast<long long>(next.samples.size());
     const bool settled = new_max <= d.max * (1 + o.refine_tolerance);
     d.max = new_max;
-    samples = std::move(dense);
+    dense = std::move(next);
+    samples = &dense.samples;
     measured = dm;
     if (settled) break;
   }
   return d;
 }
 
+Comparison combine(const Mesh& a, DirectedDistance a_to_b, DirectedDistance b_to_a) {
+  Comparison c;
+  c.a_to_b = a_to_b;
+  c.b_to_a = b_to_a;
+  c.hausdorff = std::max(c.a_to_b.max, c.b_to_a.max);
+  c.mean = 0.5 * (c.a_to_b.mean + c.b_to_a.mean);
+  c.rms = std::sqrt(0.5 * (c.a_to_b.rms * c.a_to_b.rms + c.b_to_a.rms * c.b_to_a.rms));
+  const auto box = bounding_box(a);
+  c.diagonal = box.isEmpty() ? 0.0 : box.diagonal().norm();
+  return c;
+}
+
 }  // namespace
+
+struct CompareReference::State {
+  const Mesh& mesh;
+  long long face_samples;
+  CompareOptions options;
+  detail::AabbTree tree;
+  SampleSet sampled;
+};
+
+CompareReference::CompareReference(const Mesh& reference, long long face_samples, const CompareOptions& options) {
+  if (reference.num_faces() == 0) throw Error("compare: the first mesh has no faces");
+  if (face_samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", face_samples));
+  state_ = std::make_unique<State>(State{reference, face_samples, options, detail::AabbTree(reference),
+                                         sample_surface(reference, face_samples)});
+}
+
+CompareReference::~CompareReference() = default;
+
+Comparison CompareReference::compare(const Mesh& other, std::optional<long long> other_face_samples) const {
+  if (other.num_faces() == 0) throw Error("compare: the second mesh has no faces");
+  const State& s = *state_;
+  const long long other_samples = other_face_samples.value_or(s.face_samples);
+  if (other_samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", other_samples));
+  const detail::AabbTree other_tree(other);
+  const DirectedDistance to_other = directed(s.mesh, s.sampled, other, other_tree, s.options);
+  const DirectedDistance to_reference =
+      directed(other, sample_surface(other, other_samples), s.mesh, s.tree, s.options);
+  return combine(s.mesh, to_other, to_reference);
+}
 
 Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
   if (a.num_faces() == 0) throw Error("compare: the first mesh has no faces");
@@ -149,15 +244,12 @@ Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options) 
   const long long samples =
       options.samples.value_or(std::max<long long>(10'000, 10LL * std::max(a.num_faces(), b.num_faces())));
   if (samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", samples));
-  Comparison c;
-  c.a_to_b = directed(a, b, samples, options);
-  c.b_to_a = directed(b, a, samples, options);
-  c.hausdorff = std::max(c.a_to_b.max, c.b_to_a.max);
-  c.mean = 0.5 * (c.a_to_b.mean + c.b_to_a.mean);
-  c.rms = std::sqrt(0.5 * (c.a_to_b.rms * c.a_to_b.rms + c.b_to_a.rms * c.b_to_a.rms));
-  const auto box = bounding_box(a);
-  c.diagonal = box.isEmpty() ? 0.0 : box.diagonal().norm();
-  return c;
+  // One direction at a time, so that only one surface's samples are held at once.
+  const auto one_way = [&](const Mesh& from, const Mesh& to) {
+    return directed(from, sample_surface(from, samples), to, detail::AabbTree(to), options);
+  };
+  const DirectedDistance a_to_b = one_way(a, b);
+  return combine(a, a_to_b, one_way(b, a));
 }
 
 Index count_flipped_faces(const Mesh& reference, const Mesh& mesh) {

@@ -17,8 +17,12 @@ void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsO
   if (pm.num_faces(finest) != input.num_faces() - pm.extra_faces.rows())
     throw Error(fmt::format("measure levels: the input has {} faces, the progressive mesh's finest level {}",
                             input.num_faces(), pm.num_faces(finest) + pm.extra_faces.rows()));
-  CompareOptions co;
-  co.samples = options.samples > 0 ? options.samples : std::max<long long>(10000, input.num_faces() / 2);
+  // The input is sampled, and its tree built, once for every level. A level is sampled as densely as
+  // compare() would by default, 10 points per face, up to the input's count: a coarse level far from
+  // a dense input is the slowest kind of query, and 500,000 samples on a handful of faces add nothing.
+  const long long input_samples =
+      options.samples > 0 ? options.samples : std::max<long long>(10000, input.num_faces() / 2);
+  const CompareReference reference(input, input_samples);
 
   // Level 0, then each level with factor times the faces of the last one measured; the finest level
   // is the input's surface (only unused vertices and degenerate faces differ): zero.
@@ -28,7 +32,8 @@ void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsO
   while (level < finest) {
     if (pm.num_faces(level) > 0) {  // a level without faces has no distance (its bound stands)
       cursor.go_to(level);
-      const Comparison c = compare(input, cursor.extract(VertexOrder::Stream).mesh, co);
+      const Comparison c = reference.compare(cursor.extract(VertexOrder::Stream).mesh,
+                                             std::clamp<long long>(10LL * pm.num_faces(level), 10000, input_samples));
       measured.push_back({level, c.hausdorff, c.rms});
     }
     const double next_faces = std::ceil(double(pm.num_faces(level)) * options.face_factor);
