@@ -8,6 +8,7 @@
 #include <limits>
 #include <numbers>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <vector>
 
 #include "metrics/aabb_tree.h"
@@ -231,10 +232,12 @@ Comparison CompareReference::compare(const Mesh& other, std::optional<long long>
   const State& s = *state_;
   const long long other_samples = other_face_samples.value_or(s.face_samples);
   if (other_samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", other_samples));
-  const detail::AabbTree other_tree(other);
-  const DirectedDistance to_other = directed(s.mesh, s.sampled, other, other_tree, s.options);
-  const DirectedDistance to_reference =
-      directed(other, sample_surface(other, other_samples), s.mesh, s.tree, s.options);
+  // Side by side: each direction's serial part (the other's tree, the other's samples) overlaps the
+  // other's parallel queries.
+  DirectedDistance to_other, to_reference;
+  tbb::parallel_invoke(
+      [&] { to_other = directed(s.mesh, s.sampled, other, detail::AabbTree(other), s.options); },
+      [&] { to_reference = directed(other, sample_surface(other, other_samples), s.mesh, s.tree, s.options); });
   return combine(s.mesh, to_other, to_reference);
 }
 
