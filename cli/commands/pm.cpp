@@ -219,6 +219,12 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
                level, r.total_splits, thousands(e.mesh.num_faces()), thousands(e.mesh.num_vertices()), bound,
                measured ? fmt::format(", measured {:.6g}", measured_error) : "", why,
                thousands(static_cast<long long>(r.bytes_read)), 1000 * seconds);
+    // Budgets met by the bound alone usually pick levels far finer than a viewer needs: say so once.
+    if (!measured && (o.pixel_error || o.max_error) && !o.certified)
+      fmt::print(stderr, "  note: {} holds no measured errors, so the guaranteed bound chose the level (4-50x the measured "
+                         "distance on scanned meshes); streams built with `pm build --measure` meet the budget with "
+                         "coarser levels\n",
+                 o.input);
   }
   return 0;
 }
