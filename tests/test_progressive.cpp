@@ -201,6 +201,16 @@ TEST(ProgressiveMesh, MeasuredLevelsPickWhatAViewerNeeds) {
     EXPECT_LE(m.hausdorff, pm.level_error[m.level] * (1 + 1e-9)) << "level " << m.level;
     EXPECT_GT(m.hausdorff, 0.0);
   }
+  // A sample count below the 10,000 floor holds for both sides: each level is what compare() gives at it.
+  ProgressiveMesh sparse = pm;
+  MeasureLevelsOptions few;
+  few.samples = 2000;
+  measure_levels(sparse, input, few);
+  co.samples = 2000;
+  for (std::size_t i = 0; i + 1 < sparse.measured.size(); ++i)
+    EXPECT_DOUBLE_EQ(sparse.measured[i].rms,
+                     compare(input, extract_level(pm, sparse.measured[i].level, VertexOrder::Stream).mesh, co).rms)
+        << "level " << sparse.measured[i].level;
   // Between measured levels, a level takes the coarser one's value.
   const LevelMeasurement& a = pm.measured[2];
   EXPECT_EQ(level_error(pm, a.level, LevelErrorKind::Measured), std::min(a.hausdorff, pm.level_error[a.level]));

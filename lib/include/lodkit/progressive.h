@@ -129,8 +129,9 @@ ProgressiveMesh build_progressive_mesh(const Mesh& mesh, const ProgressiveOption
 struct MeasureLevelsOptions {
   /// Levels whose face counts grow by this factor from the base are measured (and the finest level).
   double face_factor = 1.4142135623730951;
-  /// Face samples per direction for compare(); 0: half the input's face count, at least 10,000
-  /// (compare() then refines around the worst samples, so the Hausdorff distance converges).
+  /// Face samples on the input; 0: half its face count, at least 10,000. Each level gets 10 per face,
+  /// at least 10,000, never more than the input (compare() then refines around the worst samples, so
+  /// the Hausdorff distance converges).
   long long samples = 0;
 };
 

@@ -18,7 +18,7 @@ void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsO
     throw Error(fmt::format("measure levels: the input has {} faces, the progressive mesh's finest level {}",
                             input.num_faces(), pm.num_faces(finest) + pm.extra_faces.rows()));
   // The input is sampled, and its tree built, once for every level. A level is sampled as densely as
-  // compare() would by default, 10 points per face, up to the input's count: a coarse level far from
+  // compare() would by default, 10 points per face and at least 10,000, but never more than the input: a coarse level far from
   // a dense input is the slowest kind of query, and 500,000 samples on a handful of faces add nothing.
   const long long input_samples =
       options.samples > 0 ? options.samples : std::max<long long>(10000, input.num_faces() / 2);
@@ -33,7 +33,7 @@ void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsO
     if (pm.num_faces(level) > 0) {  // a level without faces has no distance (its bound stands)
       cursor.go_to(level);
       const Comparison c = reference.compare(cursor.extract(VertexOrder::Stream).mesh,
-                                             std::clamp<long long>(10LL * pm.num_faces(level), 10000, input_samples));
+                                             std::min(input_samples, std::max(10LL * pm.num_faces(level), 10000LL)));
       measured.push_back({level, c.hausdorff, c.rms});
     }
     const double next_faces = std::ceil(double(pm.num_faces(level)) * options.face_factor);
