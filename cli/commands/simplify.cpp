@@ -209,6 +209,7 @@ Examples:
   lodkit simplify part.obj -o part_lo.obj --method schroeder --max-error 0.05% --feature-angle 30
   lodkit simplify fandisk.obj -o fandisk_lo.ply --ratio 0.1 --method hoppe
   lodkit simplify fertility.obj -o fertility_lo.ply --ratio 0.1 --method hoppe --hoppe-samples 4
+  lodkit simplify counter.ply -o counter_lo.ply --ratio 0.01 --max-normal-change 90
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};
 }
