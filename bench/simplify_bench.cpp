@@ -101,7 +101,7 @@ int main(int argc, char** argv) {
     const std::string name = fs::path(path).filename().string();
     // compare(mesh, output) as its defaults sample (10 per input face: outputs have fewer faces), with
     // the input sampled once.
-    const CompareReference reference(mesh, std::max<long long>(10'000, 10LL * mesh.num_faces()));
+    const CompareReference reference(mesh, default_face_samples(mesh.num_faces()));
     for (double ratio : targets) {
       const auto target = static_cast<Index>(std::llround(ratio * mesh.num_faces()));
       bool first = true;

@@ -16,8 +16,11 @@
 
 namespace lodkit {
 
+/// compare()'s default face samples for a mesh of `faces` faces: 10 per face, at least 10,000.
+long long default_face_samples(Index faces);
+
 struct CompareOptions {
-  /// Face samples per direction; default 10 x the face count of the larger mesh (at least 10,000).
+  /// Face samples per direction; default default_face_samples() of the larger mesh.
   std::optional<long long> samples{};
   /// Rounds of re-sampling around the worst distances (0 = none).
   int refine_rounds = 4;

@@ -196,6 +196,10 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
   return d;
 }
 
+void check_samples(long long samples) {
+  if (samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", samples));
+}
+
 Comparison combine(const Mesh& a, DirectedDistance a_to_b, DirectedDistance b_to_a) {
   Comparison c;
   c.a_to_b = a_to_b;
@@ -210,6 +214,8 @@ Comparison combine(const Mesh& a, DirectedDistance a_to_b, DirectedDistance b_to
 
 }  // namespace
 
+long long default_face_samples(Index faces) { return std::max<long long>(10'000, 10LL * faces); }
+
 struct CompareReference::State {
   const Mesh& mesh;
   long long face_samples;
@@ -220,7 +226,7 @@ struct CompareReference::State {
 
 CompareReference::CompareReference(const Mesh& reference, long long face_samples, const CompareOptions& options) {
   if (reference.num_faces() == 0) throw Error("compare: the first mesh has no faces");
-  if (face_samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", face_samples));
+  check_samples(face_samples);
   state_ = std::make_unique<State>(State{reference, face_samples, options, detail::AabbTree(reference),
                                          sample_surface(reference, face_samples)});
 }
@@ -231,7 +237,7 @@ Comparison CompareReference::compare(const Mesh& other, std::optional<long long>
   if (other.num_faces() == 0) throw Error("compare: the second mesh has no faces");
   const State& s = *state_;
   const long long other_samples = other_face_samples.value_or(s.face_samples);
-  if (other_samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", other_samples));
+  check_samples(other_samples);
   // Side by side: each direction's serial part (the other's tree, the other's samples) overlaps the
   // other's parallel queries.
   DirectedDistance to_other, to_reference;
@@ -244,9 +250,8 @@ Comparison CompareReference::compare(const Mesh& other, std::optional<long long>
 Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
   if (a.num_faces() == 0) throw Error("compare: the first mesh has no faces");
   if (b.num_faces() == 0) throw Error("compare: the second mesh has no faces");
-  const long long samples =
-      options.samples.value_or(std::max<long long>(10'000, 10LL * std::max(a.num_faces(), b.num_faces())));
-  if (samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", samples));
+  const long long samples = options.samples.value_or(default_face_samples(std::max(a.num_faces(), b.num_faces())));
+  check_samples(samples);
   // One direction at a time, so that only one surface's samples are held at once.
   const auto one_way = [&](const Mesh& from, const Mesh& to) {
     return directed(from, sample_surface(from, samples), to, detail::AabbTree(to), options);

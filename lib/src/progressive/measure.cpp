@@ -33,7 +33,7 @@ void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsO
     if (pm.num_faces(level) > 0) {  // a level without faces has no distance (its bound stands)
       cursor.go_to(level);
       const Comparison c = reference.compare(cursor.extract(VertexOrder::Stream).mesh,
-                                             std::min(input_samples, std::max(10LL * pm.num_faces(level), 10000LL)));
+                                             std::min(input_samples, default_face_samples(pm.num_faces(level))));
       measured.push_back({level, c.hausdorff, c.rms});
     }
     const double next_faces = std::ceil(double(pm.num_faces(level)) * options.face_factor);
