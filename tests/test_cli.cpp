@@ -5,6 +5,7 @@
 #include <lodkit/metrics.h>
 
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sys/wait.h>
 
@@ -163,6 +164,27 @@ TEST(CliSimplify, ReasonIsPrintedWhenTheTargetIsOutOfReach) {
   EXPECT_NE(q.err.find("error limit"), std::string::npos) << q.err;
   EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --max-error 1x").status, 1);
   EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --ratio 2").status, 2);
+}
+
+TEST(CliSimplify, StoppingAtTheFlipLimitNamesTheOptionThatLiftsIt) {
+  test::ScratchDir dir("cli-simplify-hint");
+  ASSERT_EQ(run(dir, "generate torus -o t.ply --minor-radius 0.05 --major-segments 96 --minor-segments 8").status, 0);
+  const CliRun r = run(dir, "simplify t.ply -o s.ply --faces 16");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("blocked by face flips"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("hint: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--max-normal-change 90"), std::string::npos) << r.err;
+  const CliRun j = run(dir, "simplify t.ply -o s.ply --faces 16 --json");
+  ASSERT_EQ(j.status, 0) << j.err;
+  const auto json = nlohmann::json::parse(j.out);
+  EXPECT_GT(json["blocked"]["flips"].get<int>(), 0);
+  EXPECT_EQ(json["blocked"]["remaining"].get<int>(), json["faces_out"].get<int>() * 3 / 2);
+  EXPECT_TRUE(json.contains("hint"));
+  // Already at 90 degrees, or reaching the target: no hint.
+  EXPECT_EQ(run(dir, "simplify t.ply -o s.ply --faces 16 --max-normal-change 90").err.find("hint"), std::string::npos);
+  const CliRun reached = run(dir, "simplify t.ply -o s.ply --faces 400 --json");
+  EXPECT_EQ(reached.err.find("hint"), std::string::npos) << reached.err;
+  EXPECT_FALSE(nlohmann::json::parse(reached.out).contains("blocked"));
 }
 
 }  // namespace

@@ -236,6 +236,40 @@ TEST(Simplify, LockedBoundaryStaysPutAndTheReasonIsGiven) {
   EXPECT_EQ(r.locked_vertices, 40);
   EXPECT_NE(r.reason_text.find("locked"), std::string::npos) << r.reason_text;
   EXPECT_EQ(inspect(r.mesh).boundary_edges, 40);
+  EXPECT_GT(r.blocked.locked, 0);
+}
+
+// Counts the reasons of a run that stopped short; every edge left is counted once.
+Index blocked_total(const BlockedEdges& b) {
+  return b.locked + b.topology + b.boundary + b.seams + b.flips + b.slivers + b.error_limit + b.cost;
+}
+
+TEST(Simplify, StoppingShortCountsEveryEdgeLeftByItsReason) {
+  // A thin torus (tube 1/20 of the ring): at the default 60 degrees both the link condition and the
+  // flip limit hold edges back; at 90 degrees the same run gets further.
+  const Mesh torus = make_torus({.minor_radius = 0.05, .major_segments = 96, .minor_segments = 8});
+  SimplifyOptions o;
+  o.target_faces = 16;
+  const SimplifyResult r = simplify(torus, o);
+  ASSERT_EQ(r.reason, StopReason::NoLegalCollapse) << r.reason_text;
+  EXPECT_EQ(r.blocked.remaining, r.faces_out * 3 / 2);  // closed: every edge has two faces
+  EXPECT_EQ(blocked_total(r.blocked), r.blocked.remaining);
+  EXPECT_GT(r.blocked.flips, 0);
+  EXPECT_GT(r.blocked.topology, 0);
+  EXPECT_EQ(r.blocked.locked + r.blocked.boundary + r.blocked.seams + r.blocked.error_limit, 0);
+  EXPECT_NE(r.reason_text.find(std::to_string(r.blocked.flips) + " blocked by face flips"), std::string::npos)
+      << r.reason_text;
+
+  o.max_normal_change_deg = 90;
+  const SimplifyResult wider = simplify(torus, o);
+  EXPECT_LT(wider.faces_out, r.faces_out) << wider.reason_text;
+  EXPECT_EQ(inspect(wider.mesh).genus, 1);
+
+  o.target_faces = 200;  // reachable: nothing is counted
+  const SimplifyResult reached = simplify(torus, o);
+  ASSERT_EQ(reached.reason, StopReason::TargetReached);
+  EXPECT_EQ(reached.blocked.remaining, 0);
+  EXPECT_EQ(blocked_total(reached.blocked), 0);
 }
 
 TEST(Simplify, ErrorLimitStopsEarly) {
@@ -247,6 +281,8 @@ TEST(Simplify, ErrorLimitStopsEarly) {
   EXPECT_EQ(r.reason, StopReason::ErrorLimit) << r.reason_text;
   EXPECT_LE(r.error, 0.002);
   EXPECT_GT(r.faces_out, 20);
+  EXPECT_GT(r.blocked.error_limit, 0);
+  EXPECT_EQ(blocked_total(r.blocked), r.blocked.remaining);
 }
 
 TEST(Simplify, DirtyInputSimplifiesWithoutCrashing) {

@@ -39,6 +39,24 @@ double parse_error(const std::string& text, double diagonal) {
   return error.relative ? error.value * diagonal : error.value;
 }
 
+// When faces turning too far held edges back, name the option that lets them turn further: CAD parts
+// stop short at the default 60 degrees (docs/commands/simplify.md, "CAD parts that stop short").
+std::optional<std::string> flip_hint(const SimplifyResult& r, const SimplifyCliOptions& o) {
+  if (r.reason == StopReason::TargetReached || r.blocked.flips == 0 || o.allow_topology_change ||
+      o.max_normal_change >= 90)
+    return std::nullopt;
+  return fmt::format("{} of the {} edges left would turn a face by more than {:g} degrees; --max-normal-change 90 "
+                     "lets faces turn further, which often takes CAD parts closer to the target "
+                     "(docs/commands/simplify.md)",
+                     r.blocked.flips, r.blocked.remaining, o.max_normal_change);
+}
+
+nlohmann::json blocked_json(const BlockedEdges& b) {
+  return {{"remaining", b.remaining}, {"locked", b.locked},   {"topology", b.topology},
+          {"boundary", b.boundary},   {"seams", b.seams},     {"flips", b.flips},
+          {"slivers", b.slivers},     {"error_limit", b.error_limit}, {"cost", b.cost}};
+}
+
 int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {
   DecimateOptions d;
   d.target_faces = o.faces;
@@ -123,6 +141,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   std::optional<Comparison> measured;
   if (o.measure) measured = compare(mesh, r.mesh);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
+  const std::optional<std::string> hint = flip_hint(r, o);
   if (o.json) {
     nlohmann::json j{{"input", o.input}, {"output", o.output}, {"method", o.method},
                      {"faces_in", r.faces_in}, {"faces_out", r.faces_out}, {"vertices_in", r.vertices_in},
@@ -132,6 +151,8 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                      {"reason", r.reason == StopReason::TargetReached ? "target" :
                                 r.reason == StopReason::ErrorLimit ? "error-limit" : "no-legal-collapse"},
                      {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}, {"lanes", r.lanes}};
+    if (r.reason != StopReason::TargetReached) j["blocked"] = blocked_json(r.blocked);
+    if (hint) j["hint"] = *hint;
     if (measured)
       j["measured"] = {{"hausdorff", measured->hausdorff}, {"hausdorff_percent", measured->percent(measured->hausdorff)},
                        {"rms", measured->rms}, {"rms_percent", measured->percent(measured->rms)},
@@ -148,9 +169,12 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%)\n", measured->hausdorff,
                  measured->percent(measured->hausdorff), measured->rms, measured->percent(measured->rms));
     fmt::print(stderr, "  {}\n", r.reason_text);
+    if (hint) fmt::print(stderr, "  hint: {}\n", *hint);
   }
-  if (r.reason != StopReason::TargetReached && !global.quiet && o.json)
+  if (r.reason != StopReason::TargetReached && !global.quiet && o.json) {
     fmt::print(stderr, "simplify: {}\n", r.reason_text);
+    if (hint) fmt::print(stderr, "simplify: hint: {}\n", *hint);
+  }
   return 0;
 }
 

@@ -113,6 +113,20 @@ struct CollapseRecord {
   std::vector<double> attributes_after;
 };
 
+/// Why the edges left could not collapse when a run stopped short of its target: each edge once,
+/// under the more specific of its two directions' reasons. All zero when the target was reached.
+struct BlockedEdges {
+  Index remaining = 0;    ///< edges left in the output
+  Index locked = 0;       ///< an end is locked (non-manifold input, or a locked boundary)
+  Index topology = 0;     ///< the link condition: the result would not stay 2-manifold, or a part would vanish
+  Index boundary = 0;     ///< a boundary point would leave its boundary
+  Index seams = 0;        ///< an attribute seam would break
+  Index flips = 0;        ///< a face would turn by more than max_normal_change_deg
+  Index slivers = 0;      ///< a new face would be degenerate or a sliver
+  Index error_limit = 0;  ///< the collapse's error exceeds max_error
+  Index cost = 0;         ///< the cost has no value there (hoppe: no surface left for the points)
+};
+
 struct SimplifyResult {
   Mesh mesh;
   Index faces_in = 0, faces_out = 0, vertices_in = 0, vertices_out = 0;
@@ -124,6 +138,7 @@ struct SimplifyResult {
   double error = 0.0;
   StopReason reason = StopReason::TargetReached;
   std::string reason_text;          ///< one human sentence: why it stopped where it did
+  BlockedEdges blocked;             ///< the same reasons as counts, when it stopped short
   Index locked_vertices = 0;        ///< on non-manifold edges or fans (or the boundary when locked)
   Index dropped_degenerate_faces = 0;
   int lanes = 1;                    ///< slabs simplified side by side first (see lane_faces), or 1

@@ -167,7 +167,7 @@ class Engine {
   /// The cheapest legal collapse of a boundary edge (it removes one face), if any.
   std::optional<std::pair<Index, Index>> cheapest_boundary_collapse(Lane& lane);
   /// Why the remaining edges cannot collapse: the sentence, and whether the error limit blocked any.
-  std::string stop_report(Index target, bool& error_limited);
+  std::string stop_report(Index target, BlockedEdges& blocked);
 
   SimplifyOptions o_;
   EngineState s_;
@@ -732,7 +732,7 @@ std::optional<std::pair<Index, Index>> Engine::cheapest_boundary_collapse(Lane& 
   return best;
 }
 
-std::string Engine::stop_report(Index target, bool& error_limited) {
+std::string Engine::stop_report(Index target, BlockedEdges& blocked) {
   // Classify every remaining edge by why it cannot collapse.
   std::size_t counts[static_cast<int>(Rejection::kCount)] = {};
   std::vector<Index> ring;
@@ -749,7 +749,12 @@ std::string Engine::stop_report(Index target, bool& error_limited) {
       counts[static_cast<int>(std::max(a, b))]++;
     }
   }
-  error_limited = counts[static_cast<int>(Rejection::ErrorLimit)] > 0;
+  auto count = [&](Rejection r) { return static_cast<Index>(counts[static_cast<int>(r)]); };
+  blocked.remaining = remaining;
+  blocked.locked = count(Rejection::Locked), blocked.topology = count(Rejection::Topology);
+  blocked.boundary = count(Rejection::Boundary), blocked.seams = count(Rejection::Seam);
+  blocked.flips = count(Rejection::Flip), blocked.slivers = count(Rejection::Sliver);
+  blocked.error_limit = count(Rejection::ErrorLimit), blocked.cost = count(Rejection::Cost);
   const char* names[] = {"", "locked (non-manifold or locked boundary) vertices", "topology (link condition)",
                          "boundary rules", "attribute seams", "face flips", "slivers", "the error limit", "the cost"};
   std::string why;
@@ -966,9 +971,8 @@ SimplifyResult Engine::run(Index target) {
     result.reason = StopReason::TargetReached;
     result.reason_text = fmt::format("reached the target: {} faces (target {})", s_.alive_faces, target);
   } else {
-    bool error_limited = false;
-    result.reason_text = stop_report(target, error_limited);
-    result.reason = error_limited ? StopReason::ErrorLimit : StopReason::NoLegalCollapse;
+    result.reason_text = stop_report(target, result.blocked);
+    result.reason = result.blocked.error_limit > 0 ? StopReason::ErrorLimit : StopReason::NoLegalCollapse;
   }
 
   // Output: surviving faces in input order; surviving wedges in input order with their point's position.
