@@ -212,8 +212,8 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_flag("--accumulate-error", opt->accumulate_error, "schroeder: add each removal's error to its neighbours");
   sub->add_option("--seed", opt->seed, "Seed for hoppe's surface samples")->capture_default_str();
   sub->add_option("--hoppe-samples", opt->hoppe_samples,
-                  "hoppe: random surface points per face besides the vertices, at least (4 suits smooth "
-                  "meshes: fewer leave the springs strong, slow and less accurate there)")
+                  "hoppe: random surface points per face besides the vertices, at least (fewer than 4 leave "
+                  "the springs strong: slow and less accurate on smooth meshes)")
       ->check(CLI::Range(0.0, 1000.0))->capture_default_str();
   sub->add_option("--hoppe-min-points", opt->hoppe_min_points,
                   "hoppe: the fewest sample points in all; smaller meshes get more per face (0 = no floor)")
@@ -232,7 +232,6 @@ Examples:
   lodkit simplify spot.obj -o spot_small.obj --ratio 0.1 --attribute-weights 0,1,0
   lodkit simplify part.obj -o part_lo.obj --method schroeder --max-error 0.05% --feature-angle 30
   lodkit simplify fandisk.obj -o fandisk_lo.ply --ratio 0.1 --method hoppe
-  lodkit simplify fertility.obj -o fertility_lo.ply --ratio 0.1 --method hoppe --hoppe-samples 4
   lodkit simplify counter.ply -o counter_lo.ply --ratio 0.01 --max-normal-change 90
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};

@@ -73,8 +73,11 @@ struct SimplifyOptions {
   /// wedges then also take the attribute values that minimise the error.
   AttributeWeights attribute_weights{};
 
-  /// Hoppe: random points sampled per input face (besides the vertices), at least; and the seed.
-  double hoppe_points_per_face = 1.0;
+  /// Hoppe: random points sampled per input face (besides the vertices), at least; and the seed. Four
+  /// start every neighbourhood past the paper's strongest springs (under 4 points per face), which on
+  /// smooth meshes outweigh the distances, grow the stars and slow the run (fertility at 10 %: 18.8 s
+  /// with 1, 2.0 s with 4; docs/benchmarks.md, "Session 21").
+  double hoppe_points_per_face = 4.0;
   /// Hoppe: the fewest sample points in all (vertices plus random points); smaller meshes get more random
   /// points per face to reach it. With few points per face the paper's spring schedule keeps the springs
   /// strong, and on CAD meshes of long thin triangles they pull vertices off creases (fandisk's RMS at
