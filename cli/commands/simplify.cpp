@@ -41,10 +41,9 @@ double parse_error(const std::string& text, double diagonal) {
 
 // When faces turning too far held edges back, name the option that lets them turn further: CAD parts
 // stop short at the default 60 degrees (docs/commands/simplify.md, "CAD parts that stop short").
+// (Without the checks, --allow-topology-change, nothing is blocked by flips.)
 std::optional<std::string> flip_hint(const SimplifyResult& r, const SimplifyCliOptions& o) {
-  if (r.reason == StopReason::TargetReached || r.blocked.flips == 0 || o.allow_topology_change ||
-      o.max_normal_change >= 90)
-    return std::nullopt;
+  if (r.reason == StopReason::TargetReached || r.blocked.flips == 0 || o.max_normal_change >= 90) return std::nullopt;
   return fmt::format("{} of the {} edges left would turn a face by more than {:g} degrees; --max-normal-change 90 "
                      "lets faces turn further, which often takes CAD parts closer to the target "
                      "(docs/commands/simplify.md)",

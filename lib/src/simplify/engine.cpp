@@ -166,7 +166,7 @@ class Engine {
   void output_attributes(Index w, double* out) const;
   /// The cheapest legal collapse of a boundary edge (it removes one face), if any.
   std::optional<std::pair<Index, Index>> cheapest_boundary_collapse(Lane& lane);
-  /// Why the remaining edges cannot collapse: the sentence, and whether the error limit blocked any.
+  /// Why the remaining edges cannot collapse: the sentence, and the edges counted by reason.
   std::string stop_report(Index target, BlockedEdges& blocked);
 
   SimplifyOptions o_;
