@@ -30,7 +30,7 @@ struct SimplifyCliOptions {
   std::uint64_t seed = 1;
   double hoppe_samples = SimplifyOptions{}.hoppe_points_per_face;
   Index hoppe_min_points = SimplifyOptions{}.hoppe_min_points;
-  Index lane_faces = SimplifyOptions{}.lane_faces;
+  Index lane_faces = -1;  // unset: by method
 };
 
 // "0.5" is absolute; "0.5%" is a percentage of the bounding-box diagonal.
@@ -124,7 +124,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   s.seed = o.seed;
   s.hoppe_points_per_face = o.hoppe_samples;
   s.hoppe_min_points = o.hoppe_min_points;
-  s.lane_faces = o.lane_faces;
+  if (o.lane_faces >= 0) s.lane_faces = o.lane_faces;
   const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
   if (show_progress)
     s.progress = [](double f) {
@@ -218,9 +218,9 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   "hoppe: the fewest sample points in all; smaller meshes get more per face (0 = no floor)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_option("--lane-faces", opt->lane_faces,
-                  "Large meshes are first simplified in slabs of about this many faces side by side (quadric, "
-                  "edge-length; 0 = one queue throughout)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+                  "Meshes of twice this many faces are first simplified in slabs of about this many faces side by "
+                  "side (0 = one queue throughout; default 125000 for quadric and edge-length, 8000 for hoppe)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).

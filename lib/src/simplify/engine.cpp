@@ -2,6 +2,7 @@
 #include <lodkit/simplify.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
@@ -604,7 +605,8 @@ void Engine::push_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& 
   // is long (every edge at the start).
   const std::size_t n = edges.size();
   const bool costly = cost_->costly();
-  if (n < (costly ? 4u : 4096u)) {
+  // Inside a lane, the lanes are what runs side by side: a task per edge there would only add waits.
+  if (lane.region >= 0 || n < (costly ? 4u : 4096u)) {
     auto& probes = probes_.local();
     Candidate c;
     for (const auto& [a, b] : edges)
@@ -707,7 +709,11 @@ void Engine::collapse(Lane& lane, Index u, Index v, const Candidate& c) {
   // Hausdorff 0.249 -> 0.321 %, RMS 0.0210 -> 0.0216 % at 10 %, and a flipped face in the tests. A
   // collapse can lower its neighbours' costs, so their last cost is no lower bound.)
   if (cost_->wide_update())
-    for (Index w : ring) ++dirty_[w];
+    for (Index w : ring) {
+      // A slab's rim point may be in two lanes' rings at once.
+      if (lane.region >= 0) std::atomic_ref<std::uint32_t>(dirty_[w]).fetch_add(1, std::memory_order_relaxed);
+      else ++dirty_[w];
+    }
   lane.ring_edges.clear();
   for (Index w : ring) {
     lane.ring_edges.push_back({v, w});
@@ -833,8 +839,9 @@ void Engine::drain(Lane& lane, Done done, std::optional<std::pair<Index, Index>>
 bool Engine::run_lanes(std::vector<HeapEntry>& first) {
   const Index target = target_;
   const Index alive = s_.alive_faces;
-  const Index count = o_.lane_faces > 0 ? std::min<Index>(kMaxLanes, alive / o_.lane_faces) : 0;
-  if (count < 2 || o_.record_collapses || cost_->wide_update()) return false;
+  const Index per_lane = o_.lane_faces.value_or(default_lane_faces(o_.method));
+  const Index count = per_lane > 0 ? std::min<Index>(kMaxLanes, alive / per_lane) : 0;
+  if (count < 2 || o_.record_collapses) return false;
 
   // Each pass leaves the one queue after it the balance to restore at its slabs' edges: at least
   // three times the rims' faces to remove (with less, the rims' detail has to go all at once, wherever
@@ -854,6 +861,9 @@ bool Engine::run_lanes(std::vector<HeapEntry>& first) {
 std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector<HeapEntry>& queued) {
   const Index alive = s_.alive_faces;
   region_ = std::move(slabs.region);
+  // Costly costs keep their last candidates per point; one kept across passes may name a point now in
+  // another lane, whose tags that lane moves meanwhile. Dropped: those entries are scored again.
+  for (auto& list : scored_) list.clear();
   std::vector<Lane> lanes(slabs.faces.size());
   for (std::size_t i = 0; i < lanes.size(); ++i) {
     lanes[i].region = static_cast<Index>(i);
@@ -890,7 +900,8 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
     double next = INFINITY;
     for (const Lane& lane : lanes)
       if (!lane.done) next = std::min<double>(next, lane.queue.top().cost);
-    threshold = std::max(threshold * 1.25, next);
+    // (A cost may be negative, as hoppe's can: then the threshold moves up towards zero.)
+    threshold = std::max(threshold < 0 ? threshold * 0.75 : threshold * 1.25, next);
   }
   s_.alive_faces = total;
   for (const Lane& lane : lanes) collapses_ += lane.collapses, max_error_ = std::max(max_error_, lane.max_error);
@@ -1050,8 +1061,8 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
     throw Error(fmt::format("simplify: max error must not be negative, got {}", *options.max_error));
   if (!(options.max_normal_change_deg > 0 && options.max_normal_change_deg <= 180))
     throw Error("simplify: max normal change must be in (0, 180] degrees");
-  if (options.lane_faces < 0)
-    throw Error(fmt::format("simplify: faces per lane must not be negative, got {}", options.lane_faces));
+  if (options.lane_faces && *options.lane_faces < 0)
+    throw Error(fmt::format("simplify: faces per lane must not be negative, got {}", *options.lane_faces));
   if (!(options.hoppe_points_per_face >= 0 && options.hoppe_points_per_face <= 1000))
     throw Error(fmt::format("simplify: hoppe's random points per face must be between 0 and 1000, got {}",
                             options.hoppe_points_per_face));
@@ -1071,6 +1082,8 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
 int attribute_values_per_vertex(const Mesh& mesh) {
   return 3 * mesh.has_normals() + 2 * mesh.has_uvs() + 4 * mesh.has_colours();
 }
+
+Index default_lane_faces(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 8000 : 125000; }
 
 std::string to_string(SimplifyMethod method) {
   switch (method) {

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <bit>
 #include <iterator>
+#include <mutex>
 #include <random>
 #include <unordered_map>
 #include <tbb/enumerable_thread_specific.h>
@@ -33,15 +34,20 @@ struct Sample {
 };
 
 /// The points sampled on the input's boundary, each belonging to one boundary edge of the current mesh.
+/// Lanes (slabs simplified side by side) look up and change the edges at their own points only, but
+/// in one map: its lookups and changes take the lock. (A list found stays where it is: the map's
+/// nodes never move, and no other lane touches it.)
 struct BoundaryCurves {
   std::vector<Eigen::Vector3d> point;
   std::vector<double> dist2;  ///< per point: squared distance to its edge
   std::unordered_map<std::uint64_t, std::vector<Index>> edge_points;  ///< by edge_key()
+  mutable std::mutex lock;
 
   static std::uint64_t edge_key(Index a, Index b) {
     return std::uint64_t(std::uint32_t(std::min(a, b))) << 32 | std::uint32_t(std::max(a, b));
   }
   const std::vector<Index>* points_of(Index a, Index b) const {
+    const std::lock_guard hold(lock);
     const auto it = edge_points.find(edge_key(a, b));
     return it == edge_points.end() ? nullptr : &it->second;
   }
@@ -444,6 +450,7 @@ class HoppeCost final : public CostModel {
     // Each point with the index in `around` of the face it had (none for a vanished face's points).
     const std::vector<Index>& around = s.faces_of(v);
     const std::size_t none = around.size();
+    auto& [moving_, home_, rows_] = reassign_scratch_.local();
     moving_.clear(), home_.clear();
     for (Index f : removed_faces) {
       moving_.insert(moving_.end(), face_samples_[f].begin(), face_samples_[f].end());
@@ -497,6 +504,7 @@ class HoppeCost final : public CostModel {
   void reassign_boundary(const EngineState& s, Index u, Index v) {
     std::vector<Index> ends, moving;
     boundary_neighbours(s, v, ends);
+    const std::lock_guard hold(curves_.lock);
     auto take = [&](Index a, Index b) {
       const auto it = curves_.edge_points.find(BoundaryCurves::edge_key(a, b));
       if (it == curves_.edge_points.end()) return;
@@ -522,10 +530,13 @@ class HoppeCost final : public CostModel {
   }
 
   std::vector<std::vector<Sample>> face_samples_;  ///< per face: the points that belong to it
-  // Scratch of collapsed().
-  std::vector<Sample> moving_;
-  std::vector<std::size_t> home_;  ///< per point of moving_: its face's index in faces_of(v)
-  BoundRows rows_;
+  // Scratch of collapsed(), per thread (lanes collapse side by side).
+  struct ReassignScratch {
+    std::vector<Sample> moving;
+    std::vector<std::size_t> home;  ///< per point of moving: its face's index in faces_of(v)
+    BoundRows rows;
+  };
+  tbb::enumerable_thread_specific<ReassignScratch> reassign_scratch_;
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
   BoundaryCurves curves_;
   tbb::enumerable_thread_specific<HoppeScorer> scorers_{
