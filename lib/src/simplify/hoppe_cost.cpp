@@ -450,44 +450,44 @@ class HoppeCost final : public CostModel {
     // Each point with the index in `around` of the face it had (none for a vanished face's points).
     const std::vector<Index>& around = s.faces_of(v);
     const std::size_t none = around.size();
-    auto& [moving_, home_, rows_] = reassign_scratch_.local();
-    moving_.clear(), home_.clear();
+    auto& [moving, home_of, rows] = reassign_scratch_.local();
+    moving.clear(), home_of.clear();
     for (Index f : removed_faces) {
-      moving_.insert(moving_.end(), face_samples_[f].begin(), face_samples_[f].end());
-      home_.resize(moving_.size(), none);
+      moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
+      home_of.resize(moving.size(), none);
       std::vector<Sample>().swap(face_samples_[f]);  // gone for good: free it
     }
     for (std::size_t i = 0; i < around.size(); ++i) {
       auto& list = face_samples_[around[i]];
-      moving_.insert(moving_.end(), list.begin(), list.end());
-      home_.resize(moving_.size(), i);
+      moving.insert(moving.end(), list.begin(), list.end());
+      home_of.resize(moving.size(), i);
       list.clear();
     }
     // Each point goes to its nearest face, the first in `around` on a tie (a vertex's point is on
     // every face at that vertex). The face it had, if any, is measured first; a face whose lower bound
     // exceeds that distance cannot be nearer (the margin covers the bounds' rounding), so only the few
     // others left are measured, in order.
-    rows_.resize(around.size());
+    rows.resize(around.size());
     for (std::size_t i = 0; i < around.size(); ++i) {
       const Eigen::Vector3d c[3] = {s.position[s.corner_point(around[i], 0)], s.position[s.corner_point(around[i], 1)],
                                     s.position[s.corner_point(around[i], 2)]};
       TrianglePlanes planes;
       planes.set(c);
-      rows_.set(i, planes);
+      rows.set(i, planes);
     }
     auto distance2 = [&](const Eigen::Vector3d& x, Index f) {
       const Eigen::Vector3d q = closest_point_on_triangle(x, s.position[s.corner_point(f, 0)], s.position[s.corner_point(f, 1)],
                                                           s.position[s.corner_point(f, 2)]);
       return (q - x).squaredNorm();
     };
-    for (std::size_t j = 0; j < moving_.size(); ++j) {
-      Sample& sample = moving_[j];
-      const std::size_t home = home_[j];
+    for (std::size_t j = 0; j < moving.size(); ++j) {
+      Sample& sample = moving[j];
+      const std::size_t home = home_of[j];
       const double reach = home != none ? distance2(sample.x, around[home]) : INFINITY;
       const double limit = std::isfinite(reach) ? (std::sqrt(reach) + margin_) * (std::sqrt(reach) + margin_) : INFINITY;
       double best = INFINITY;
       Index best_face = -1;
-      const double* bounds = rows_.lower_bounds2(sample.x);
+      const double* bounds = rows.lower_bounds2(sample.x);
       for (std::size_t k = 0; k < around.size(); ++k) {
         if (k != home && bounds[k] > limit) continue;
         const double d = k == home ? reach : distance2(sample.x, around[k]);
@@ -533,7 +533,7 @@ class HoppeCost final : public CostModel {
   // Scratch of collapsed(), per thread (lanes collapse side by side).
   struct ReassignScratch {
     std::vector<Sample> moving;
-    std::vector<std::size_t> home;  ///< per point of moving: its face's index in faces_of(v)
+    std::vector<std::size_t> home_of;  ///< per point of moving: its face's index in faces_of(v)
     BoundRows rows;
   };
   tbb::enumerable_thread_specific<ReassignScratch> reassign_scratch_;
