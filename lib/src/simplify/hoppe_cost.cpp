@@ -79,7 +79,11 @@ class HoppeScorer {
   struct Tri : TrianglePlanes {
     Eigen::Vector3d c[3];
     int moving;
-    double opposite;  ///< the length of the side opposite the moving corner
+    int side;  ///< the side opposite the moving corner, from corner moving + 1 to moving + 2
+    // Per point, the moving corner's weight is a distance times one of these: set once per triangle,
+    // not divided out at every point.
+    double per_distance;  ///< that side's length over twice the area: weight per unit from the side
+    double per_area;      ///< 1 / twice the area (0 for a degenerate triangle)
   };
   struct Nearest {
     double d2, b;           ///< squared distance; barycentric weight of the moving corner
@@ -113,8 +117,8 @@ class HoppeScorer {
     Eigen::Vector3d solved;
     auto energy = [&](const Eigen::Vector3d& p, bool solve) {
       // Project every point onto the new star; optionally solve for the position given the projections.
-      double e = 0, sum_b2 = 0;
-      worst = 0;
+      // (Sums in locals: the captured ones were stored back to memory at every point.)
+      double e = 0, sum_b2 = 0, max_d2 = 0;
       curve_projections_.clear();
       Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
       // The star's triangles, with the planes that bound the distance to each from below.
@@ -123,8 +127,10 @@ class HoppeScorer {
         Tri tri;
         for (int k = 0; k < 3; ++k) tri.c[k] = t[k] < 0 ? p : s.position[t[k]];
         tri.moving = t[0] < 0 ? 0 : t[1] < 0 ? 1 : 2;
+        tri.side = (tri.moving + 1) % 3;
         tri.set(tri.c);
-        tri.opposite = (tri.c[(tri.moving + 2) % 3] - tri.c[(tri.moving + 1) % 3]).norm();
+        tri.per_area = tri.twice_area > 0 ? 1.0 / tri.twice_area : 0.0;
+        tri.per_distance = (tri.c[(tri.moving + 2) % 3] - tri.c[tri.side]).norm() * tri.per_area;
         tri_.push_back(tri);
       }
       // (Projecting in parallel did not pay: a neighbourhood holds 50-300 points, a few microseconds.)
@@ -133,7 +139,7 @@ class HoppeScorer {
         const Nearest& n = nearest_[j];
         const double weight = weight_[j];
         e += weight * n.d2;
-        worst = std::max(worst, n.d2);
+        max_d2 = std::max(max_d2, n.d2);
         if (solve) {
           sum_b2 += weight * n.b * n.b;
           rhs += weight * n.b * (points_[j] - n.fixed);
@@ -147,7 +153,7 @@ class HoppeScorer {
         for (Index w : curve_ends_)
           if (const auto [dw, bw] = on_segment(x, p, s.position[w]); dw < d2) d2 = dw, b = bw, end = w;
         e += d2;
-        worst = std::max(worst, d2);
+        max_d2 = std::max(max_d2, d2);
         if (solve) {
           const Eigen::Vector3d fixed = (1 - b) * s.position[end];
           sum_b2 += b * b;
@@ -159,22 +165,24 @@ class HoppeScorer {
         e += kappa * (p - s.position[w]).squaredNorm();
         if (solve) rhs += kappa * s.position[w], sum_b2 += kappa;
       }
+      worst = max_d2;
       if (solve) {
         solved = sum_b2 > 0 ? Eigen::Vector3d(rhs / sum_b2) : p;
-        solved_energy = 0, solved_worst = 0;
+        double energy_there = 0, worst_there = 0;
         // The surface points' projections are read where they are (nearest_), then the boundary's.
         for (std::size_t j = 0; j < points_.size(); ++j) {
           const Nearest& n = nearest_[j];
           const double d = (points_[j] - n.b * solved - n.fixed).squaredNorm();
-          solved_energy += weight_[j] * d;
-          solved_worst = std::max(solved_worst, d);
+          energy_there += weight_[j] * d;
+          worst_there = std::max(worst_there, d);
         }
         for (const Projection& pr : curve_projections_) {
           const double d = (pr.x - pr.b * solved - pr.fixed).squaredNorm();
-          solved_energy += d;
-          solved_worst = std::max(solved_worst, d);
+          energy_there += d;
+          worst_there = std::max(worst_there, d);
         }
-        for (Index w : ring_) solved_energy += kappa * (solved - s.position[w]).squaredNorm();
+        for (Index w : ring_) energy_there += kappa * (solved - s.position[w]).squaredNorm();
+        solved_energy = energy_there, solved_worst = worst_there;
       }
       return e;
     };
@@ -247,9 +255,8 @@ class HoppeScorer {
     Nearest out{plane * plane, 0.0, Eigen::Vector3d::Zero()};
     if (solve) {
       const Eigen::Vector3d q = x - plane * t.normal;
-      const int o = (t.moving + 1) % 3;  // the side from corner moving + 1 to moving + 2
-      const double inside = t.edge_offset[o] - t.edge_normal[o].dot(x);
-      out.b = std::clamp(inside * t.opposite / t.twice_area, 0.0, 1.0);
+      const double inside = t.edge_offset[t.side] - t.edge_normal[t.side].dot(x);
+      out.b = std::clamp(inside * t.per_distance, 0.0, 1.0);
       out.fixed = q - out.b * p;
     }
     return out;
@@ -263,7 +270,7 @@ class HoppeScorer {
     if (solve) {
       const int m = t.moving;
       const Eigen::Vector3d e1 = t.c[(m + 1) % 3] - q, e2 = t.c[(m + 2) % 3] - q;
-      out.b = t.twice_area > 0 ? std::clamp(e1.cross(e2).dot(t.normal) / t.twice_area, 0.0, 1.0) : 0.0;
+      out.b = std::clamp(e1.cross(e2).dot(t.normal) * t.per_area, 0.0, 1.0);
       out.fixed = q - out.b * p;
     }
     return out;
