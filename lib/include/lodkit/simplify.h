@@ -90,7 +90,7 @@ struct SimplifyOptions {
   /// side by side (up to 8, when no collapses are recorded): a slab's rim waits for the end, when one
   /// queue finishes the job. The result does not depend on the thread count. 0 = never; unset: by
   /// method (default_lane_faces()).
-  std::optional<Index> lane_faces;
+  std::optional<Index> lane_faces{};
 
   bool record_collapses = false;
   /// Called with the fraction done (0..1), at most about 100 times.

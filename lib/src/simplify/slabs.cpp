@@ -1,6 +1,7 @@
 #include "simplify/slabs.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace lodkit::detail {
 
@@ -47,6 +48,13 @@ Slabs cut_into_slabs(const EngineState& s, Index count, bool shifted) {
                             out.region[s.corner_point(f, 2)] < 0))
       ++out.rim_faces;
   return out;
+}
+
+Index lane_pass_stop(Index alive, Index target, Index rim_faces) {
+  // stop - target >= 3 rim (1 - stop / alive), solved for stop.
+  if (alive <= 0) return target;
+  const double three_rims = 3.0 * rim_faces;
+  return static_cast<Index>(std::ceil((target + three_rims) / (1.0 + three_rims / alive)));
 }
 
 }  // namespace lodkit::detail
