@@ -457,7 +457,7 @@ class HoppeCost final : public CostModel {
     // Each point with the index in `around` of the face it had (none for a vanished face's points).
     const std::vector<Index>& around = s.faces_of(v);
     const std::size_t none = around.size();
-    auto& [moving, home_of, rows] = reassign_scratch_.local();
+    auto& [moving, home_of, rows, bounds_hold] = reassign_scratch_.local();
     moving.clear(), home_of.clear();
     for (Index f : removed_faces) {
       moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
@@ -475,12 +475,14 @@ class HoppeCost final : public CostModel {
     // exceeds that distance cannot be nearer (the margin covers the bounds' rounding), so only the few
     // others left are measured, in order.
     rows.resize(around.size());
+    bounds_hold.resize(around.size());
     for (std::size_t i = 0; i < around.size(); ++i) {
       const Eigen::Vector3d c[3] = {s.position[s.corner_point(around[i], 0)], s.position[s.corner_point(around[i], 1)],
                                     s.position[s.corner_point(around[i], 2)]};
       TrianglePlanes planes;
       planes.set(c);
       rows.set(i, planes);
+      bounds_hold[i] = planes.bounds;
     }
     auto distance2 = [&](const Eigen::Vector3d& x, Index f) {
       const Eigen::Vector3d q = closest_point_on_triangle(x, s.position[s.corner_point(f, 0)], s.position[s.corner_point(f, 1)],
@@ -490,11 +492,16 @@ class HoppeCost final : public CostModel {
     for (std::size_t j = 0; j < moving.size(); ++j) {
       Sample& sample = moving[j];
       const std::size_t home = home_of[j];
-      const double reach = home != none ? distance2(sample.x, around[home]) : INFINITY;
+      const double* bounds = rows.lower_bounds2(sample.x);
+      // Inside its face's prism (most points), the distance is the plane's: no region walk.
+      double reach = INFINITY;
+      if (home != none) {
+        const double plane = rows.plane_distances()[home];
+        reach = bounds_hold[home] && bounds[home] == plane * plane ? plane * plane : distance2(sample.x, around[home]);
+      }
       const double limit = std::isfinite(reach) ? (std::sqrt(reach) + margin_) * (std::sqrt(reach) + margin_) : INFINITY;
       double best = INFINITY;
       Index best_face = -1;
-      const double* bounds = rows.lower_bounds2(sample.x);
       for (std::size_t k = 0; k < around.size(); ++k) {
         if (k != home && bounds[k] > limit) continue;
         const double d = k == home ? reach : distance2(sample.x, around[k]);
@@ -542,6 +549,7 @@ class HoppeCost final : public CostModel {
     std::vector<Sample> moving;
     std::vector<std::size_t> home_of;  ///< per point of moving: its face's index in faces_of(v)
     BoundRows rows;
+    std::vector<char> bounds_hold;  ///< per face of faces_of(v): whether its row bounds (not a sliver)
   };
   tbb::enumerable_thread_specific<ReassignScratch> reassign_scratch_;
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
