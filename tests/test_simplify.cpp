@@ -6,6 +6,7 @@
 #include <lodkit/primitives.h>
 #include <lodkit/simplify.h>
 
+#include <algorithm>
 #include <numbers>
 #include <random>
 #include <tbb/global_control.h>
@@ -167,6 +168,46 @@ TEST(Simplify, FlatGridBecomesTwoTrianglesWithZeroError) {
   EXPECT_EQ(r.faces_out, 2) << r.reason_text;
   EXPECT_LT(compare(grid, r.mesh).hausdorff, 1e-9);
   EXPECT_NEAR(inspect(r.mesh).area, 6.0, 1e-9);
+}
+
+// The most faces around any vertex of m (the grids here have one wedge per point).
+Index most_faces_at_a_vertex(const Mesh& m) {
+  std::vector<Index> faces(static_cast<std::size_t>(m.num_vertices()), 0);
+  for (Index f = 0; f < m.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) ++faces[static_cast<std::size_t>(m.triangles(f, k))];
+  return *std::max_element(faces.begin(), faces.end());
+}
+
+// On a flat part only hoppe's springs order the collapses, and the paper's schedule weakens them where
+// points have piled up: the coarser a patch, the cheaper its next collapse. Without a limit a vertex
+// gathers 36 faces on this grid (60-100 on a 20,000-face grid, which then takes 12 s to 1 %).
+TEST(Simplify, HoppeGrowsNoHubsOnFlatParts) {
+  const Mesh grid = make_grid({.divisions_x = 30, .divisions_y = 30});
+  SimplifyOptions o{.method = SimplifyMethod::Hoppe, .target_ratio = 0.1};
+  o.hoppe_min_points = 0;  // 4 random points per face, as a large mesh gets: the springs start strong
+  const SimplifyResult r = simplify(grid, o);
+  ASSERT_EQ(r.reason, StopReason::TargetReached) << r.reason_text;
+  EXPECT_LE(most_faces_at_a_vertex(r.mesh), default_max_valence(SimplifyMethod::Hoppe));
+  // Flat still; the boundary holds to within its samples' reach (corners are cut by 2e-6 with or without
+  // the limit: hoppe weighs the boundary's points against its springs).
+  EXPECT_EQ(r.mesh.positions.col(2).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LT(compare(grid, r.mesh).hausdorff, 1e-5);
+  EXPECT_NEAR(inspect(r.mesh).area, 1.0, 1e-5);
+  o.max_valence = 0;  // no limit: the failure it prevents
+  EXPECT_GT(most_faces_at_a_vertex(simplify(grid, o).mesh), default_max_valence(SimplifyMethod::Hoppe));
+}
+
+// A limit that every collapse would break stops the run short, and says so.
+TEST(Simplify, ValenceLimitHoldsForAnyMethodAndIsReported) {
+  const Mesh grid = make_grid({.divisions_x = 20, .divisions_y = 20});  // 6 faces at an inner vertex
+  for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe, SimplifyMethod::EdgeLength}) {
+    SCOPED_TRACE(to_string(method));
+    const SimplifyResult r = simplify(grid, {.method = method, .target_faces = 8, .max_valence = 7});
+    EXPECT_LE(most_faces_at_a_vertex(r.mesh), 7);
+    EXPECT_EQ(r.reason, StopReason::NoLegalCollapse);
+    EXPECT_GT(r.blocked.valence, 0);
+    EXPECT_NE(r.reason_text.find("blocked by the valence limit"), std::string::npos) << r.reason_text;
+  }
 }
 
 // A thin blade (an icosphere flattened to 2 % thickness): the face planes of both sides contain
@@ -381,6 +422,7 @@ TEST(Simplify, BadOptionsAreErrors) {
   EXPECT_THROW(simplify(m, {.target_faces = -3}), Error);
   EXPECT_THROW(simplify(m, {.max_error = -1.0}), Error);
   EXPECT_THROW(simplify(m, {.lane_faces = -1}), Error);
+  EXPECT_THROW(simplify(m, {.max_valence = -1}), Error);
   SimplifyOptions hoppe{.method = SimplifyMethod::Hoppe};
   for (const double bad : {-1.0, std::nan(""), 1e6}) {
     hoppe.hoppe_points_per_face = bad;

@@ -31,6 +31,7 @@ struct SimplifyCliOptions {
   double hoppe_samples = SimplifyOptions{}.hoppe_points_per_face;
   Index hoppe_min_points = SimplifyOptions{}.hoppe_min_points;
   Index lane_faces = -1;  // unset: by method
+  Index max_valence = -1;  // unset: by method
 };
 
 // "0.5" is absolute; "0.5%" is a percentage of the bounding-box diagonal.
@@ -39,21 +40,30 @@ double parse_error(const std::string& text, double diagonal) {
   return error.relative ? error.value * diagonal : error.value;
 }
 
-// When faces turning too far held edges back, name the option that lets them turn further: CAD parts
-// stop short at the default 60 degrees (docs/commands/simplify.md, "CAD parts that stop short").
-// (Without the checks, --allow-topology-change, nothing is blocked by flips.)
-std::optional<std::string> flip_hint(const SimplifyResult& r, const SimplifyCliOptions& o) {
-  if (r.reason == StopReason::TargetReached || r.blocked.flips == 0 || o.max_normal_change >= 90) return std::nullopt;
-  return fmt::format("{} of the {} edges left would turn a face by more than {:g} degrees; --max-normal-change 90 "
-                     "lets faces turn further, which often takes CAD parts closer to the target "
-                     "(docs/commands/simplify.md)",
-                     r.blocked.flips, r.blocked.remaining, o.max_normal_change);
+// When a rule with an option held edges back, name the option. Faces turning too far: CAD parts stop
+// short at the default 60 degrees (docs/commands/simplify.md, "CAD parts that stop short"). (Without
+// the checks, --allow-topology-change, nothing is blocked by flips.) The valence limit: a vertex with
+// many faces.
+std::optional<std::string> stop_hint(const SimplifyResult& r, const SimplifyCliOptions& o) {
+  if (r.reason == StopReason::TargetReached) return std::nullopt;
+  std::string hint;
+  if (r.blocked.valence > 0)
+    hint = fmt::format("{} of the {} edges left would give a vertex more faces than the valence limit; "
+                       "--max-valence 0 lifts it",
+                       r.blocked.valence, r.blocked.remaining);
+  if (r.blocked.flips > 0 && o.max_normal_change < 90)
+    hint += fmt::format("{}{} of the {} edges left would turn a face by more than {:g} degrees; --max-normal-change 90 "
+                        "lets faces turn further, which often takes CAD parts closer to the target",
+                        hint.empty() ? "" : "; ", r.blocked.flips, r.blocked.remaining, o.max_normal_change);
+  if (hint.empty()) return std::nullopt;
+  return hint + " (docs/commands/simplify.md)";
 }
 
 nlohmann::json blocked_json(const BlockedEdges& b) {
   return {{"remaining", b.remaining}, {"locked", b.locked},   {"topology", b.topology},
           {"boundary", b.boundary},   {"seams", b.seams},     {"flips", b.flips},
-          {"slivers", b.slivers},     {"error_limit", b.error_limit}, {"cost", b.cost}};
+          {"slivers", b.slivers},     {"valence", b.valence},     {"error_limit", b.error_limit},
+          {"cost", b.cost}};
 }
 
 int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {
@@ -125,6 +135,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   s.hoppe_points_per_face = o.hoppe_samples;
   s.hoppe_min_points = o.hoppe_min_points;
   if (o.lane_faces >= 0) s.lane_faces = o.lane_faces;
+  if (o.max_valence >= 0) s.max_valence = o.max_valence;
   const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
   if (show_progress)
     s.progress = [](double f) {
@@ -140,7 +151,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   std::optional<Comparison> measured;
   if (o.measure) measured = compare(mesh, r.mesh);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
-  const std::optional<std::string> hint = flip_hint(r, o);
+  const std::optional<std::string> hint = stop_hint(r, o);
   if (o.json) {
     nlohmann::json j{{"input", o.input}, {"output", o.output}, {"method", o.method},
                      {"faces_in", r.faces_in}, {"faces_out", r.faces_out}, {"vertices_in", r.vertices_in},
@@ -220,6 +231,10 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--lane-faces", opt->lane_faces,
                   "Meshes of twice this many faces are first simplified in slabs of about this many faces side by "
                   "side (0 = one queue throughout; default 125000 for quadric and edge-length, 8000 for hoppe)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--max-valence", opt->max_valence,
+                  "No collapse may leave a vertex with more faces around it than this, unless it had as many before "
+                  "(0 = no limit; default 24 for hoppe, which otherwise grows hubs on flat parts; none for the others)")
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");

@@ -23,7 +23,7 @@ namespace detail {
 namespace {
 
 // Why a candidate collapse was refused. The final report counts these over the edges left.
-enum class Rejection { None, Locked, Topology, Boundary, Seam, Flip, Sliver, ErrorLimit, Cost, kCount };
+enum class Rejection { None, Locked, Topology, Boundary, Seam, Valence, Flip, Sliver, ErrorLimit, Cost, kCount };
 
 // At most this many lanes (slabs simplified side by side; see Engine::run_lanes).
 constexpr Index kMaxLanes = 8;
@@ -81,6 +81,7 @@ class Engine {
       case SimplifyMethod::Hoppe: cost_ = make_hoppe_cost(o_, s_); break;
     }
     cos_max_turn_ = std::cos(o_.max_normal_change_deg * std::numbers::pi / 180.0);
+    max_valence_ = o_.max_valence.value_or(default_max_valence(o_.method));
     if (cost_->costly()) scored_.resize(s_.position.size());
   }
 
@@ -186,6 +187,7 @@ class Engine {
   };
   std::vector<std::vector<Scored>> scored_;
   double cos_max_turn_ = 0;
+  Index max_valence_ = 0;  // faces at a vertex, at most (0 = no limit; see SimplifyOptions::max_valence)
   std::vector<EdgeUse> edges_;  // every edge of the input, from setup() until run() has queued them
   std::vector<Index> canonical_;  // per input vertex: the first vertex identical to it
   std::vector<Index> region_;  // per point: its slab while lanes run, -1 on a slab's rim; then empty
@@ -472,6 +474,12 @@ Rejection Engine::structure(Index u, Index v, Freedom& freedom, Lane* link, Prob
   if (s_.has(u, kBorder) && !border_edge) return Rejection::Boundary;  // u would leave its boundary
 
   if (const Rejection r = map_wedges(u, v, probe); r != Rejection::None) return r;
+  if (max_valence_ > 0) {
+    // The merged vertex has the faces of both but the vanishing ones; a collapse that leaves no vertex
+    // with more faces than before is always allowed.
+    const std::size_t nu = fu.size(), nv = s_.faces_of(v).size(), merged = nu + nv - 2 * probe.shared.size();
+    if (merged > std::size_t(max_valence_) && merged > std::max(nu, nv)) return Rejection::Valence;
+  }
 
   if (o_.preserve_topology && link) {
     // Link condition: the only common neighbours of u and v are the apexes of the vanishing faces.
@@ -756,10 +764,12 @@ std::string Engine::stop_report(Index target, BlockedEdges& blocked) {
   blocked.remaining = remaining;
   blocked.locked = count(Rejection::Locked), blocked.topology = count(Rejection::Topology);
   blocked.boundary = count(Rejection::Boundary), blocked.seams = count(Rejection::Seam);
+  blocked.valence = count(Rejection::Valence);
   blocked.flips = count(Rejection::Flip), blocked.slivers = count(Rejection::Sliver);
   blocked.error_limit = count(Rejection::ErrorLimit), blocked.cost = count(Rejection::Cost);
   const char* names[] = {"", "locked (non-manifold or locked boundary) vertices", "topology (link condition)",
-                         "boundary rules", "attribute seams", "face flips", "slivers", "the error limit", "the cost"};
+                         "boundary rules", "attribute seams", "the valence limit", "face flips", "slivers",
+                         "the error limit", "the cost"};
   std::string why;
   for (int r = 1; r < static_cast<int>(Rejection::kCount); ++r)
     if (counts[r]) why += fmt::format("{}{} blocked by {}", why.empty() ? "" : ", ", counts[r], names[r]);
@@ -1064,6 +1074,8 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
     throw Error("simplify: max normal change must be in (0, 180] degrees");
   if (options.lane_faces && *options.lane_faces < 0)
     throw Error(fmt::format("simplify: faces per lane must not be negative, got {}", *options.lane_faces));
+  if (options.max_valence && *options.max_valence < 0)
+    throw Error(fmt::format("simplify: the valence limit must not be negative, got {}", *options.max_valence));
   if (!(options.hoppe_points_per_face >= 0 && options.hoppe_points_per_face <= 1000))
     throw Error(fmt::format("simplify: hoppe's random points per face must be between 0 and 1000, got {}",
                             options.hoppe_points_per_face));
@@ -1085,6 +1097,8 @@ int attribute_values_per_vertex(const Mesh& mesh) {
 }
 
 Index default_lane_faces(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 8000 : 125000; }
+
+Index default_max_valence(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 24 : 0; }
 
 std::string to_string(SimplifyMethod method) {
   switch (method) {
