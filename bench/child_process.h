@@ -11,8 +11,8 @@
 #include <exception>
 #include <fstream>
 #include <functional>
-#include <string>
 #include <new>
+#include <string>
 #include <tbb/global_control.h>
 #include <vector>
 
