@@ -20,11 +20,13 @@ class BoundRows {
     rows_.resize(64 * blocks_);
     bounds_.resize(4 * blocks_);
     planes_.resize(4 * blocks_);
+    prism_.resize(m);
   }
   /// Triangle i's planes (a sliver's bound is 0, as TrianglePlanes::lower_bound2 has it).
   void set(std::size_t i, const TrianglePlanes& t) {
     double* r = rows_.data() + 64 * (i / 4) + i % 4;
     auto at = [&](int row) -> double& { return r[4 * row]; };
+    prism_[i] = t.bounds;
     if (!t.bounds) {
       for (int row = 0; row < 16; ++row) at(row) = 0.0;
       return;
@@ -48,6 +50,9 @@ class BoundRows {
   /// bound equals its square, x lies inside the triangle's prism (no edge plane has it outside), and
   /// for a triangle that bounds (not a sliver), that is then x's squared distance to it.
   const double* plane_distances() const { return planes_.data(); }
+  /// Whether the point of the last lower_bounds2(x) lies inside triangle i's prism, so that its squared
+  /// plane distance is its squared distance to the triangle (never for a sliver, whose bound is 0).
+  bool inside_prism(std::size_t i) const { return prism_[i] && bounds_[i] == planes_[i] * planes_[i]; }
   /// Whether the AVX2 kernel is used where the CPU has it (default); off, the plain one, which must
   /// give the same bits (tests switch it to check that).
   static void use_vector_kernel(bool on);
@@ -57,6 +62,7 @@ class BoundRows {
   std::vector<double> rows_;
   std::vector<double> bounds_;  ///< the last point's bounds (padded to whole blocks)
   std::vector<double> planes_;  ///< the last point's signed distances to the planes
+  std::vector<char> prism_;     ///< per triangle: whether its rows bound (not a sliver)
 };
 
 }  // namespace lodkit::detail

@@ -220,13 +220,12 @@ class HoppeScorer {
     for (std::size_t j = 0; j < points_.size(); ++j) {
       const Eigen::Vector3d& x = points_[j];
       const double* bounds = rows_.lower_bounds2(x);
-      const double* planes = rows_.plane_distances();
       const std::size_t first = home_[j] >= 0 ? std::size_t(home_[j]) : rows_.lowest();
       Nearest& out = nearest_[j];
-      out = nearest_on(tri_[first], x, bounds[first], planes[first], p, solve);
+      out = nearest_on(first, x, p, solve);
       auto try_triangle = [&](std::size_t k) {
         if (bounds[k] >= out.d2) return;
-        const Nearest c = nearest_on(tri_[k], x, bounds[k], planes[k], p, solve);
+        const Nearest c = nearest_on(k, x, p, solve);
         if (c.d2 < out.d2) out = c;
       };
       if (m <= 64) {
@@ -242,10 +241,9 @@ class HoppeScorer {
     }
   }
 
-  // The nearest point to x on t, given x's bound and signed plane distance for t: where the bound is
-  // the plane distance squared, x is inside t's prism.
-  static Nearest nearest_on(const Tri& t, const Eigen::Vector3d& x, double bound, double plane, const Eigen::Vector3d& p, bool solve) {
-    return t.bounds && bound == plane * plane ? in_prism(x, t, plane, p, solve) : on_triangle(x, t, p, solve);
+  // The nearest point to x on star triangle k, x being the point of the last rows_.lower_bounds2().
+  Nearest nearest_on(std::size_t k, const Eigen::Vector3d& x, const Eigen::Vector3d& p, bool solve) const {
+    return rows_.inside_prism(k) ? in_prism(x, tri_[k], rows_.plane_distances()[k], p, solve) : on_triangle(x, tri_[k], p, solve);
   }
 
   // The same for x inside t's prism, at signed distance `plane` from its plane: the nearest point is
@@ -457,7 +455,7 @@ class HoppeCost final : public CostModel {
     // Each point with the index in `around` of the face it had (none for a vanished face's points).
     const std::vector<Index>& around = s.faces_of(v);
     const std::size_t none = around.size();
-    auto& [moving, home_of, rows, bounds_hold] = reassign_scratch_.local();
+    auto& [moving, home_of, rows] = reassign_scratch_.local();
     moving.clear(), home_of.clear();
     for (Index f : removed_faces) {
       moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
@@ -475,14 +473,12 @@ class HoppeCost final : public CostModel {
     // exceeds that distance cannot be nearer (the margin covers the bounds' rounding), so only the few
     // others left are measured, in order.
     rows.resize(around.size());
-    bounds_hold.resize(around.size());
     for (std::size_t i = 0; i < around.size(); ++i) {
       const Eigen::Vector3d c[3] = {s.position[s.corner_point(around[i], 0)], s.position[s.corner_point(around[i], 1)],
                                     s.position[s.corner_point(around[i], 2)]};
       TrianglePlanes planes;
       planes.set(c);
       rows.set(i, planes);
-      bounds_hold[i] = planes.bounds;
     }
     auto distance2 = [&](const Eigen::Vector3d& x, Index f) {
       const Eigen::Vector3d q = closest_point_on_triangle(x, s.position[s.corner_point(f, 0)], s.position[s.corner_point(f, 1)],
@@ -495,10 +491,8 @@ class HoppeCost final : public CostModel {
       const double* bounds = rows.lower_bounds2(sample.x);
       // Inside its face's prism (most points), the distance is the plane's: no region walk.
       double reach = INFINITY;
-      if (home != none) {
-        const double plane = rows.plane_distances()[home];
-        reach = bounds_hold[home] && bounds[home] == plane * plane ? plane * plane : distance2(sample.x, around[home]);
-      }
+      if (home != none)
+        reach = rows.inside_prism(home) ? bounds[home] : distance2(sample.x, around[home]);
       const double limit = std::isfinite(reach) ? (std::sqrt(reach) + margin_) * (std::sqrt(reach) + margin_) : INFINITY;
       double best = INFINITY;
       Index best_face = -1;
@@ -549,7 +543,6 @@ class HoppeCost final : public CostModel {
     std::vector<Sample> moving;
     std::vector<std::size_t> home_of;  ///< per point of moving: its face's index in faces_of(v)
     BoundRows rows;
-    std::vector<char> bounds_hold;  ///< per face of faces_of(v): whether its row bounds (not a sliver)
   };
   tbb::enumerable_thread_specific<ReassignScratch> reassign_scratch_;
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
