@@ -356,6 +356,28 @@ TEST(Simplify, DirtyInputSimplifiesWithoutCrashing) {
   }
 }
 
+TEST(Simplify, ADroppedDegenerateFaceChangesNothingElse) {
+  // A face with two corners on one position is dropped before the run; the faces after it then sit one
+  // place further on than the engine's own lists of them, which the boundary and crease planes must
+  // follow. The result is the clean mesh's, exactly: a box (creases) and a grid (a boundary).
+  for (const Mesh& clean : {make_box({.size = {2, 1, 1}, .divisions = 6}), make_grid({.divisions_x = 16, .divisions_y = 12})}) {
+    Mesh dirty = clean;
+    const Index nv = clean.num_vertices(), nf = clean.num_faces();
+    dirty.positions.conservativeResize(nv + 1, 3);
+    dirty.positions.row(nv) = clean.positions.row(0);  // a second vertex on vertex 0's position
+    dirty.triangles.resize(nf + 1, 3);
+    dirty.triangles.row(0) << 0, nv, clean.triangles(0, 1);
+    dirty.triangles.bottomRows(nf) = clean.triangles;
+    SimplifyOptions o;
+    o.target_ratio = 0.2;
+    const SimplifyResult a = simplify(clean, o), b = simplify(dirty, o);
+    EXPECT_EQ(b.dropped_degenerate_faces, 1);
+    ASSERT_EQ(a.faces_out, b.faces_out);
+    EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+    EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+  }
+}
+
 TEST(Simplify, TriangleSoupKeepsEveryTriangleAndSaysWhy) {
   // Separate triangles (a soup): every edge is a boundary edge, and collapsing one would delete its
   // whole triangle. hoppe has no surface left to measure its points against there; it crashed on such

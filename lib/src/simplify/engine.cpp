@@ -90,6 +90,7 @@ class Engine {
  private:
   void setup(const Mesh& mesh);
   void setup_attributes(const Mesh& mesh);
+  /// face_id: the face of each entry the edges name (empty: the same).
   void add_crease_planes(const std::vector<Index>& face_id);
   // Checks are split by cost: the cheap ones (flags, shared faces, seam wedges) decide where the
   // surviving vertex may go and run whenever a candidate is scored; the link condition and the
@@ -238,10 +239,6 @@ void Engine::setup(const Mesh& mesh) {
       for (int k = 0; k < 3; ++k) ++degree[s_.point_of[canonical[mesh.triangles(f, k)]]];
     for (Index p = 0; p < points; ++p) s_.point_faces[p].reserve(degree[p]);
   }
-  std::vector<std::array<Index, 3>> point_faces;
-  point_faces.reserve(faces);
-  std::vector<Index> face_id;  // of each entry of point_faces
-  face_id.reserve(faces);
   for (Index f = 0; f < mesh.num_faces(); ++f) {
     const std::array<Index, 3> w{canonical[mesh.triangles(f, 0)], canonical[mesh.triangles(f, 1)],
                                  canonical[mesh.triangles(f, 2)]};
@@ -258,11 +255,20 @@ void Engine::setup(const Mesh& mesh) {
       continue;
     }
     s_.face_dead.push_back(0);
-    point_faces.push_back(p);
-    face_id.push_back(f);
     for (Index q : p) s_.point_faces[q].push_back(f);
   }
-  s_.alive_faces = static_cast<Index>(point_faces.size());
+  s_.alive_faces = mesh.num_faces() - dropped_;
+  // The faces that take part, for the edge and fan classification: face_point itself unless some were
+  // dropped (a copy of it cost 17 MiB on a 1M-face mesh), with the face of each entry.
+  std::vector<std::array<Index, 3>> live_copy;
+  std::vector<Index> face_id;  // empty: every face takes part
+  if (dropped_ > 0) {
+    live_copy.reserve(static_cast<std::size_t>(s_.alive_faces));
+    face_id.reserve(static_cast<std::size_t>(s_.alive_faces));
+    for (Index f = 0; f < mesh.num_faces(); ++f)
+      if (!s_.face_dead[f]) live_copy.push_back(s_.face_point[f]), face_id.push_back(f);
+  }
+  const std::vector<std::array<Index, 3>>& point_faces = dropped_ > 0 ? live_copy : s_.face_point;
 
   // Boundaries and non-manifold parts.
   edges_ = classify_edges(point_faces);
@@ -270,7 +276,7 @@ void Engine::setup(const Mesh& mesh) {
   for (const EdgeUse& e : edges_) {
     if (e.faces == 1) {
       s_.flags[e.lo] |= kBorder, s_.flags[e.hi] |= kBorder;
-      const Index f = face_id[e.face[0]];
+      const Index f = face_id.empty() ? e.face[0] : face_id[e.face[0]];
       const int k = s_.side(f, e.lo, e.hi);
       border_side[3 * std::size_t(f) + k] = 1;
       s_.input_boundary.push_back({s_.corner_point(f, k), s_.corner_point(f, (k + 1) % 3)});
@@ -335,7 +341,8 @@ void Engine::add_crease_planes(const std::vector<Index>& face_id) {
   std::vector<Index> across(3 * static_cast<std::size_t>(faces), -1);  // per face side: the other face
   for (const EdgeUse& e : edges_) {
     if (e.faces != 2 || !e.consistent) continue;
-    const Index f0 = face_id[e.face[0]], f1 = face_id[e.face[1]];
+    const Index f0 = face_id.empty() ? e.face[0] : face_id[e.face[0]];
+    const Index f1 = face_id.empty() ? e.face[1] : face_id[e.face[1]];
     const Index f = std::min(f0, f1);
     across[3 * std::size_t(f) + s_.side(f, e.lo, e.hi)] = std::max(f0, f1);
   }
@@ -884,9 +891,14 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
   {
     // Entries with an end on a rim are dropped: the rims' edges are rated afresh after the pass. (No
     // entry is stale: nothing collapsed since they were rated or filtered.)
-    std::vector<std::vector<HeapEntry>> split(lanes.size());
+    auto lane_of = [&](const HeapEntry& e) { return region_[e.u] >= 0 && region_[e.u] == region_[e.v] ? region_[e.u] : -1; };
+    std::vector<std::size_t> sizes(lanes.size(), 0);
     for (const HeapEntry& e : queued)
-      if (region_[e.u] >= 0 && region_[e.u] == region_[e.v]) split[region_[e.u]].push_back(e);
+      if (const Index i = lane_of(e); i >= 0) ++sizes[i];
+    std::vector<std::vector<HeapEntry>> split(lanes.size());
+    for (std::size_t i = 0; i < lanes.size(); ++i) split[i].reserve(sizes[i]);  // exact: no spare half
+    for (const HeapEntry& e : queued)
+      if (const Index i = lane_of(e); i >= 0) split[i].push_back(e);
     queued = {};
     tbb::parallel_for(std::size_t(0), lanes.size(), [&](std::size_t i) { lanes[i].queue.load(std::move(split[i])); });
   }
@@ -931,21 +943,32 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
   }
   region_ = {};
   std::vector<HeapEntry> entries = rate_all(edges);
-  for (Lane& lane : lanes)
-    for (const HeapEntry& e : lane.queue.take())
-      if (!stale(e)) entries.push_back(e);
+  std::size_t total_entries = entries.size();
+  for (const Lane& lane : lanes) total_entries += lane.queue.size();
+  entries.reserve(total_entries);
+  for (Lane& lane : lanes) {
+    const std::vector<HeapEntry> left = lane.queue.take();
+    std::copy_if(left.begin(), left.end(), std::back_inserter(entries), [&](const HeapEntry& e) { return !stale(e); });
+  }
   return entries;
 }
 
 std::vector<HeapEntry> Engine::rate_all(const std::vector<std::pair<Index, Index>>& edges) {
-  // (Their candidates are not kept: most are re-scored before they reach the top, and keeping them
-  // all raised hoppe's peak on the horse by 15 MiB, to 71.)
-  rate_edges(main_, edges, false);
-  std::vector<HeapEntry> entries;
-  entries.reserve(edges.size());
-  for (const auto& e : main_.rated)
-    if (e) entries.push_back(*e);
-  main_.rated = {};
+  // Straight into the entries, those of illegal edges then dropped: an array of optional entries
+  // beside them was 39 MiB more at the peak on a 1M-face mesh. (Their candidates are not kept: most
+  // are re-scored before they reach the top, and keeping them all raised hoppe's peak on the horse by
+  // 15 MiB, to 71.)
+  constexpr Index kNone = -1;
+  std::vector<HeapEntry> entries(edges.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), cost_->costly() ? 1 : 1024),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      auto& probes = probes_.local();
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                        const auto e = rate_edge(edges[i].first, edges[i].second, -1, probes);
+                        entries[i] = e ? *e : HeapEntry{0, kNone, kNone, 0, 0};
+                      }
+                    });
+  std::erase_if(entries, [](const HeapEntry& e) { return e.u == kNone; });
   return entries;
 }
 
