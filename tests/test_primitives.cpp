@@ -7,6 +7,7 @@
 #include <functional>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include "core/bound_rows.h"
 #include "core/geometry.h"
@@ -275,6 +276,34 @@ TEST(Geometry, BoundRowsKernelsAgreeBitForBitAndPickTheSameTriangles) {
       }
     }
   }
+}
+
+TEST(Geometry, LocalOriginIsExactToMeasureFromAndNearAFarMesh) {
+  // Boxes far from zero, near it, across it, and below it: every p in the box has p - o exact, so it
+  // comes back as p.
+  std::mt19937 rng(11);
+  const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> boxes = {
+      {{1e6 - 1, -2e6 - 1, 3e6 - 1}, {1e6 + 1, -2e6 + 1, 3e6 + 1}},
+      {{0.3, 0.31, 7.0}, {1.2, 0.5, 27.9}},
+      {{-1, -0.5, 1e-9}, {1, 0.5, 1}},
+      {{-8.0, -1e-3, -3.0}, {-2.0, -1e-4, -2.9}}};
+  for (const auto& [lo, hi] : boxes) {
+    const Eigen::Vector3d o = detail::local_origin(Eigen::AlignedBox3d(lo, hi));
+    for (int i = 0; i < 3; ++i) {
+      std::uniform_real_distribution<double> coordinate(lo[i], hi[i]);
+      for (int k = 0; k < 1000; ++k) {
+        const double x = k == 0 ? lo[i] : k == 1 ? hi[i] : coordinate(rng);
+        const double local = x - o[i];
+        ASSERT_EQ(local + o[i], x) << x << " from " << o[i];
+        ASSERT_EQ(x - local, o[i]) << x << " from " << o[i];  // the subtraction lost nothing
+      }
+    }
+  }
+  // Far from zero, the origin is inside the box; across or near zero, it is zero.
+  const Eigen::Vector3d far = detail::local_origin(Eigen::AlignedBox3d(boxes[0].first, boxes[0].second));
+  EXPECT_TRUE(Eigen::AlignedBox3d(boxes[0].first, boxes[0].second).contains(far));
+  EXPECT_EQ(detail::local_origin(Eigen::AlignedBox3d(boxes[2].first, boxes[2].second)), Eigen::Vector3d::Zero());
+  EXPECT_EQ(detail::local_origin(Eigen::AlignedBox3d()), Eigen::Vector3d::Zero());
 }
 
 }  // namespace

@@ -95,4 +95,20 @@ inline double triangle_area(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   return 0.5 * (b - a).cross(c - a).norm();
 }
 
+/// A point near `box` to measure positions from, such that p - origin is exact for every p in the box,
+/// and so (p - origin) + origin == p. Per axis, Sterbenz's lemma: x - o is exact when o/2 <= x <= 2o, so
+/// where the box lies within a factor of four of its distance from zero on one side, o is its centre
+/// clamped to [max/2, 2 min] (mirrored below zero); elsewhere 0, which then lies closer to the box
+/// than a third of its extent.
+inline Eigen::Vector3d local_origin(const Eigen::AlignedBox3d& box) {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  if (box.isEmpty()) return origin;
+  for (int i = 0; i < 3; ++i) {
+    const double lo = box.min()[i], hi = box.max()[i];
+    if (lo > 0 && hi <= 4 * lo) origin[i] = std::clamp(0.5 * (lo + hi), 0.5 * hi, 2 * lo);
+    else if (hi < 0 && lo >= 4 * hi) origin[i] = std::clamp(0.5 * (lo + hi), 2 * hi, 0.5 * lo);
+  }
+  return origin;
+}
+
 }  // namespace lodkit::detail

@@ -12,6 +12,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/geometry.h"
 #include "core/topology.h"
 #include "simplify/engine.h"
 #include "simplify/queue.h"
@@ -215,6 +216,7 @@ class Engine {
 
 void Engine::setup(const Mesh& mesh) {
   const Index nv = mesh.num_vertices();
+  s_.origin = local_origin(bounding_box(mesh));
   // Points: one per distinct position.
   const Eigen::VectorX<Index> cls = position_classes(mesh);
   s_.point_of.assign(static_cast<std::size_t>(nv), -1);
@@ -224,7 +226,7 @@ void Engine::setup(const Mesh& mesh) {
     Index& p = point_of_class[cls[v]];
     if (p < 0) {
       p = points++;
-      s_.position.push_back(mesh.positions.row(v).transpose());
+      s_.position.push_back(mesh.positions.row(v).transpose() - s_.origin);
     }
     s_.point_of[v] = p;
   }
@@ -661,7 +663,7 @@ void Engine::collapse(Lane& lane, Index u, Index v, const Candidate& c) {
   const Probe& probe = lane.probe;
   CollapseRecord* rec = nullptr;
   if (o_.record_collapses) {
-    records_.push_back({u, v, s_.position[v], c.position, c.error, {}, {}, {}, {}, {}});
+    records_.push_back({u, v, s_.position[v] + s_.origin, c.position + s_.origin, c.error, {}, {}, {}, {}, {}});
     rec = &records_.back();
     for (int i = 0; i < probe.wedge_map_size; ++i) rec->wedge_map.push_back({probe.wedge_map[i].first, probe.wedge_map[i].second});
   }
@@ -1051,7 +1053,7 @@ SimplifyResult Engine::run(Index target) {
   if (in.has_face_colours()) out.attributes.face_colours.resize(nf, 4);
   for (Index i = 0; i < nv; ++i) {
     const Index w = result.vertex_origin[i];
-    out.positions.row(i) = s_.position[s_.point_of[w]].transpose();
+    out.positions.row(i) = (s_.position[s_.point_of[w]] + s_.origin).transpose();
     if (in.has_normals()) out.attributes.normals.row(i) = a.normals.row(w);
     if (in.has_uvs()) out.attributes.uvs.row(i) = a.uvs.row(w);
     if (in.has_colours()) out.attributes.colours.row(i) = a.colours.row(w);

@@ -30,7 +30,11 @@ enum PointFlag : std::uint8_t {
 struct EngineState {
   const Mesh* input = nullptr;
   std::vector<Index> point_of;                  ///< wedge -> point
-  std::vector<Eigen::Vector3d> position;        ///< per point
+  /// Positions are kept relative to this point, near the mesh when it lies far from the origin: a
+  /// quadric's terms grow with the squared distance from the origin, and at 10^6 their rounding
+  /// swamped the errors they rank. Subtracting it is exact (local_origin()).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> position;        ///< per point, relative to origin
   std::vector<Quadric> quadric;                 ///< per point: planes of its faces (and boundary)
   std::vector<std::uint8_t> flags;              ///< per point: PointFlag bits
   std::vector<std::vector<Index>> point_faces;  ///< per point: incident faces (dead ones pruned lazily)

@@ -413,8 +413,9 @@ class HoppeCost final : public CostModel {
       for (; carry >= 1.0; carry -= 1.0) {
         double a = unit(rng), b = unit(rng);
         if (a + b > 1) a = 1 - a, b = 1 - b;
-        const Eigen::Vector3d p0 = m.positions.row(s.face[f][0]), p1 = m.positions.row(s.face[f][1]),
-                              p2 = m.positions.row(s.face[f][2]);
+        const Eigen::Vector3d p0 = m.positions.row(s.face[f][0]).transpose() - s.origin,
+                              p1 = m.positions.row(s.face[f][1]).transpose() - s.origin,
+                              p2 = m.positions.row(s.face[f][2]).transpose() - s.origin;
         add_point(p0 + a * (p1 - p0) + b * (p2 - p0), Index(f));
       }
     }
