@@ -32,6 +32,7 @@ struct SimplifyCliOptions {
   Index hoppe_min_points = SimplifyOptions{}.hoppe_min_points;
   Index lane_faces = -1;  // unset: by method
   Index max_valence = -1;  // unset: by method
+  double max_total_normal_change = -1;  // unset: by method
 };
 
 // "0.5" is absolute; "0.5%" is a percentage of the bounding-box diagonal.
@@ -125,6 +126,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   if (o.preserve_boundary) s.boundary_weight = 1000.0;
   s.preserve_topology = !o.allow_topology_change;
   s.max_normal_change_deg = o.max_normal_change;
+  if (o.max_total_normal_change >= 0) s.max_total_normal_change_deg = o.max_total_normal_change;
   s.crease_weight = o.crease_weight;
   if (!o.attribute_weights.empty()) {
     if (o.attribute_weights.size() != 3)
@@ -209,6 +211,10 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                 "Skip the link condition and flip checks (shows how naive methods fail)");
   sub->add_option("--max-normal-change", opt->max_normal_change, "Largest turn of a face in one collapse (degrees)")
       ->check(CLI::Range(1.0, 180.0))->capture_default_str();
+  sub->add_option("--max-total-normal-change", opt->max_total_normal_change,
+                  "Largest turn of a face from its input orientation over all collapses, never below "
+                  "--max-normal-change (degrees; default 90 for quadric, 60 for hoppe and edge-length)")
+      ->check(CLI::Range(1.0, 180.0));
   sub->add_option("--crease-weight", opt->crease_weight,
                   "Weight of the planes that keep thin fins, spikes and sharp ridges (quadric; 0 = off)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();

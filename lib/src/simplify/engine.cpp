@@ -82,6 +82,8 @@ class Engine {
       case SimplifyMethod::Hoppe: cost_ = make_hoppe_cost(o_, s_); break;
     }
     cos_max_turn_ = std::cos(o_.max_normal_change_deg * std::numbers::pi / 180.0);
+    const double total = o_.max_total_normal_change_deg.value_or(default_max_total_normal_change(o_.method));
+    cos_max_total_turn_ = std::cos(std::max(total, o_.max_normal_change_deg) * std::numbers::pi / 180.0);
     max_valence_ = o_.max_valence.value_or(default_max_valence(o_.method));
     if (cost_->costly()) scored_.resize(s_.position.size());
   }
@@ -197,7 +199,7 @@ class Engine {
     Candidate c;
   };
   std::vector<std::vector<Scored>> scored_;
-  double cos_max_turn_ = 0;
+  double cos_max_turn_ = 0, cos_max_total_turn_ = 0;
   Index max_valence_ = 0;  // faces at a vertex, at most (0 = no limit; see SimplifyOptions::max_valence)
   std::vector<EdgeUse> edges_;  // every edge of the input, from setup() until run() has queued them
   std::vector<Index> canonical_;  // per input vertex: the first vertex identical to it
@@ -551,10 +553,10 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
       const Eigen::Vector3d n1 = (after[1] - after[0]).cross(after[2] - after[0]);
       const double l0 = n0.norm(), l1 = n1.norm();
       if (!(l1 > 0)) return Rejection::Sliver;
-      // Against the face's last shape, and against its input shape: small turns must not add up to
-      // a flip over many collapses.
+      // Against the face's last shape, and against its input shape (by a limit of its own): small turns
+      // must not add up to a flip over many collapses.
       if (l0 > 0 && n1.dot(n0) < cos_max_turn_ * l0 * l1) return Rejection::Flip;
-      if (n1.dot(s_.face_normal0[f].cast<double>()) < cos_max_turn_ * l1) return Rejection::Flip;
+      if (n1.dot(s_.face_normal0[f].cast<double>()) < cos_max_total_turn_ * l1) return Rejection::Flip;
       auto quality = [&](const Eigen::Vector3d* t, double twice_area) {
         const double sum = (t[1] - t[0]).squaredNorm() + (t[2] - t[1]).squaredNorm() + (t[0] - t[2]).squaredNorm();
         return sum > 0 ? kQualityScale * 0.5 * twice_area / sum : 0.0;
@@ -1046,6 +1048,7 @@ SimplifyResult Engine::run(Index target) {
   Mesh& out = result.mesh;
   out.positions.resize(nv, 3);
   out.triangles.resize(nf, 3);
+  result.face_origin.reserve(static_cast<std::size_t>(nf));
   const Attributes& a = in.attributes;
   if (in.has_normals()) out.attributes.normals.resize(nv, 3);
   if (in.has_uvs()) out.attributes.uvs.resize(nv, 2);
@@ -1074,6 +1077,7 @@ SimplifyResult Engine::run(Index target) {
     if (s_.face_dead[f]) continue;
     for (int k = 0; k < 3; ++k) out.triangles(row, k) = new_index[s_.face[f][k]];
     if (in.has_face_colours()) out.attributes.face_colours.row(row) = a.face_colours.row(static_cast<Index>(f));
+    result.face_origin.push_back(static_cast<Index>(f));
     ++row;
   }
   result.faces_out = nf;
@@ -1106,6 +1110,10 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
     throw Error(fmt::format("simplify: max error must not be negative, got {}", *options.max_error));
   if (!(options.max_normal_change_deg > 0 && options.max_normal_change_deg <= 180))
     throw Error("simplify: max normal change must be in (0, 180] degrees");
+  if (options.max_total_normal_change_deg &&
+      !(*options.max_total_normal_change_deg > 0 && *options.max_total_normal_change_deg <= 180))
+    throw Error(fmt::format("simplify: max total normal change must be in (0, 180] degrees, got {}",
+                            *options.max_total_normal_change_deg));
   if (options.lane_faces && *options.lane_faces < 0)
     throw Error(fmt::format("simplify: faces per lane must not be negative, got {}", *options.lane_faces));
   if (options.max_valence && *options.max_valence < 0)
@@ -1133,6 +1141,8 @@ int attribute_values_per_vertex(const Mesh& mesh) {
 Index default_lane_faces(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 8000 : 125000; }
 
 Index default_max_valence(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 24 : 0; }
+
+double default_max_total_normal_change(SimplifyMethod method) { return method == SimplifyMethod::Quadric ? 90.0 : 60.0; }
 
 std::string to_string(SimplifyMethod method) {
   switch (method) {
