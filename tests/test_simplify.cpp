@@ -419,7 +419,7 @@ TEST(Simplify, NoFaceTurnsFurtherFromItsInputSelfThanTheTotalLimit) {
 
 TEST(Simplify, FarFromTheOriginSimplifiesAsWellAsAtIt) {
   // A quadric's terms grow with the squared distance from the origin: a million units out their
-  // rounding swamped the errors they rank, and the collapses went in near-random order (Hausdorff 2.3x
+  // rounding swamped the errors they rank, and the collapses went in near-random order (Hausdorff 2.5x
   // the centred run's, and a flipped face once faces could turn 90 degrees). The engine measures from
   // a point near the mesh.
   const Mesh near = test::bumpy_sphere(4, 0.02);
