@@ -176,16 +176,16 @@ TEST(CliSimplify, ReasonIsPrintedWhenTheTargetIsOutOfReach) {
 
 TEST(CliSimplify, StoppingAtTheValenceLimitNamesTheOptionThatLiftsIt) {
   test::ScratchDir dir("cli-simplify-valence");
-  ASSERT_EQ(run(dir, "generate grid -o g.ply --divisions 20").status, 0);
-  const CliRun r = run(dir, "simplify g.ply -o s.ply --faces 8 --max-valence 7 --json");
+  ASSERT_EQ(run(dir, "generate torus -o g.ply").status, 0);
+  const CliRun r = run(dir, "simplify g.ply -o s.ply --faces 16 --max-valence 8 --json");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto json = nlohmann::json::parse(r.out);
   EXPECT_GT(json["blocked"]["valence"].get<int>(), 0);
   EXPECT_NE(json["hint"].get<std::string>().find("--max-valence 0"), std::string::npos) << json.dump();
-  EXPECT_NE(run(dir, "simplify g.ply -o s.ply --faces 8 --max-valence 7").err.find("blocked by the valence limit"),
+  EXPECT_NE(run(dir, "simplify g.ply -o s.ply --faces 16 --max-valence 8").err.find("blocked by the valence limit"),
             std::string::npos);
-  EXPECT_EQ(run(dir, "simplify g.ply -o s.ply --faces 8 --max-valence 0").err.find("valence"), std::string::npos);
-  EXPECT_EQ(run(dir, "simplify g.ply -o s.ply --faces 8 --max-valence -3").status, 2);
+  EXPECT_EQ(run(dir, "simplify g.ply -o s.ply --faces 16 --max-valence 0").err.find("valence"), std::string::npos);
+  EXPECT_EQ(run(dir, "simplify g.ply -o s.ply --faces 16 --max-valence -3").status, 2);
 }
 
 TEST(CliSimplify, StoppingAtTheFlipLimitNamesTheOptionThatLiftsIt) {

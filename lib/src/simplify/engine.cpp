@@ -145,6 +145,8 @@ class Engine {
   /// One pass of lanes over `slabs` until `stop_at` faces are left; takes the entries queued so far and
   /// returns those left, the rims' edges rated.
   std::vector<HeapEntry> lane_pass(Slabs slabs, Index stop_at, std::vector<HeapEntry>& queued);
+  /// Every edge of the mesh as it is now, each once.
+  std::vector<std::pair<Index, Index>> remaining_edges();
   /// The queue entries of these edges, rated side by side, in list order.
   std::vector<HeapEntry> rate_all(const std::vector<std::pair<Index, Index>>& edges);
   /// Calls the progress callback, about once a percent, with `alive` faces left.
@@ -966,6 +968,18 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
   return entries;
 }
 
+std::vector<std::pair<Index, Index>> Engine::remaining_edges() {
+  std::vector<std::pair<Index, Index>> edges;
+  std::vector<Index>& ring = main_.ring;
+  for (Index p = 0; p < static_cast<Index>(s_.position.size()); ++p) {
+    if (s_.has(p, kRemoved)) continue;
+    neighbours(p, ring);
+    for (Index q : ring)
+      if (q > p) edges.push_back({p, q});
+  }
+  return edges;
+}
+
 std::vector<HeapEntry> Engine::rate_all(const std::vector<std::pair<Index, Index>>& edges) {
   // Straight into the entries, those of illegal edges then dropped: an array of optional entries
   // beside them was 39 MiB more at the peak on a 1M-face mesh. (Their candidates are not kept: most
@@ -1013,6 +1027,18 @@ SimplifyResult Engine::run(Index target) {
   // The best legal collapse, kept back when it would remove two faces and one is left to remove.
   std::optional<std::pair<Index, Index>> deferred;
   drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
+  // The queue ran dry above the target. An edge refused when it was last rated is rated again only when
+  // a collapse keeps one of its ends, so one that a collapse beside it made legal (a face there no
+  // longer turns too far) was never queued again, and the run stopped short of a legal collapse. Rate
+  // every edge left once more, and go on while that finds collapses.
+  while (!deferred && s_.alive_faces > target) {
+    std::vector<HeapEntry> entries = rate_all(remaining_edges());
+    if (entries.empty()) break;
+    const Index before = main_.collapses;
+    main_.queue.load(std::move(entries));
+    drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
+    if (main_.collapses == before) break;
+  }
   Candidate c;
   if (s_.alive_faces > target && deferred) {
     // Only a boundary edge removes exactly one face. Look for the cheapest directly: draining the
