@@ -4,6 +4,13 @@
 namespace lodkit::detail {
 namespace {
 
+// Ties between collapses that cost nothing (flat parts, straight runs) go to the shorter edge. Their
+// quadric costs are rounding noise, so without it a shift of the input reordered them and the coarse
+// result with them: fandisk -> 1 % under shifts of 0-4 units, Hausdorff 0.91-2.22 %, with it 1.21-1.22 %.
+// 10^-8 of the squared edge length per unit of area sits above that noise (about 10^-16 of the squared
+// size) and far below a scan's errors: over the shared meshes at 10 % and 1 %, Hausdorff and RMS x1.00.
+constexpr double kShorterEdgeFirst = 1e-8;
+
 class QuadricCost final : public CostModel {
  public:
   explicit QuadricCost(Placement placement) : placement_(placement) {}
@@ -34,6 +41,7 @@ class QuadricCost final : public CostModel {
       consider(pv, have);
     }
     out.error = quadric_distance(q, out.position);
+    out.cost += kShorterEdgeFirst * (pu - pv).squaredNorm() * q.weight;
     if (s.attribute_quadrics.enabled()) {
       // Attribute error of every wedge pair that merges, at their best attribute values.
       double value[16];
