@@ -41,6 +41,9 @@ struct HeapEntry {
   std::uint32_t epoch;    // dirty_[u] + dirty_[v] when scored: re-score if it moved
 };
 
+// The face an entry of setup()'s face list is, given the faces of its entries (empty: the same).
+Index input_face(const std::vector<Index>& face_id, Index entry) { return face_id.empty() ? entry : face_id[entry]; }
+
 // Cheapest first; ties broken by index so runs are deterministic.
 struct CheaperFirst {
   bool operator()(const HeapEntry& a, const HeapEntry& b) const {
@@ -65,7 +68,7 @@ struct Lane {
   // Scratch, reused across calls.
   Probe probe;
   std::vector<Index> ring, ring_u, ring_v, ring_tmp;
-  std::vector<std::optional<HeapEntry>> rated;
+  std::vector<HeapEntry> rated;              ///< see Engine::rate_edges()
   std::vector<Candidate> rated_candidates;  ///< with rated, when scores are remembered
   std::vector<std::pair<Index, Index>> ring_edges, rescore;
 };
@@ -121,9 +124,11 @@ class Engine {
   /// Rates the edges (side by side when they are many, or costly) and queues them in list order, so
   /// the queue is the same whatever the number of threads.
   void push_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& edges);
-  /// Rates the edges side by side into lane.rated, in list order (with `keep`, and their candidates into
-  /// lane.rated_candidates).
-  void rate_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& edges, bool keep);
+  /// Rates the edges side by side into `out`, in list order, an illegal edge's entry marked by
+  /// unrated() (and their candidates into `candidates` when given, as long as `edges`).
+  void rate_edges(const std::vector<std::pair<Index, Index>>& edges, Index region, std::vector<HeapEntry>& out,
+                  Candidate* candidates);
+  static bool unrated(const HeapEntry& e) { return e.u < 0; }
   /// Both ends inside the slab (region -1: anywhere, and always once the lanes are done).
   bool inside(Index region, Index u, Index v) const {
     return region < 0 || (region_[u] == region && region_[v] == region);
@@ -151,22 +156,20 @@ class Engine {
   std::vector<HeapEntry> rate_all(const std::vector<std::pair<Index, Index>>& edges);
   /// Calls the progress callback, about once a percent, with `alive` faces left.
   void report_progress(Index alive);
-  /// Asks for point p's data before it is needed: the loop is bound by cache misses on points
-  /// scattered over a large mesh, and asking for several at once overlaps them.
-  void prefetch_point(Index p) const {
-    __builtin_prefetch(&s_.quadric[p]);
-    __builtin_prefetch(reinterpret_cast<const char*>(&s_.quadric[p]) + 64);
-    __builtin_prefetch(&s_.position[p]);
-    __builtin_prefetch(s_.point_faces[p].data());
-  }
-  /// What rating an edge at p reads of p: its quadric, position and face list's header (not the list:
-  /// rating does not read it, and asking for it stalled on a cache miss per ring point, 2-3 % of a
-  /// quadric run on igea 1M).
+  /// Point p's data asked for before it is needed: the loop is bound by cache misses on points
+  /// scattered over a large mesh, and asking for several at once overlaps them. For rating an edge at
+  /// p: its quadric, position and face list's header (not the list: rating does not read it, and
+  /// asking for it stalled on a cache miss per ring point, 2-3 % of a quadric run on igea 1M).
   void prefetch_for_rating(Index p) const {
     __builtin_prefetch(&s_.quadric[p]);
     __builtin_prefetch(reinterpret_cast<const char*>(&s_.quadric[p]) + 64);
     __builtin_prefetch(&s_.position[p]);
     __builtin_prefetch(&s_.point_faces[p]);
+  }
+  /// That, and p's face list, for checking a collapse at p.
+  void prefetch_point(Index p) const {
+    prefetch_for_rating(p);
+    __builtin_prefetch(s_.point_faces[p].data());
   }
   // The next two levels of what checking a collapse at p reads: its faces once p's face list is in
   // cache, then their corners' positions once the faces are.
@@ -291,7 +294,7 @@ void Engine::setup(const Mesh& mesh) {
   for (const EdgeUse& e : edges_) {
     if (e.faces == 1) {
       s_.flags[e.lo] |= kBorder, s_.flags[e.hi] |= kBorder;
-      const Index f = face_id.empty() ? e.face[0] : face_id[e.face[0]];
+      const Index f = input_face(face_id, e.face[0]);
       const int k = s_.side(f, e.lo, e.hi);
       border_side[3 * std::size_t(f) + k] = 1;
       s_.input_boundary.push_back({s_.corner_point(f, k), s_.corner_point(f, (k + 1) % 3)});
@@ -356,8 +359,7 @@ void Engine::add_crease_planes(const std::vector<Index>& face_id) {
   std::vector<Index> across(3 * static_cast<std::size_t>(faces), -1);  // per face side: the other face
   for (const EdgeUse& e : edges_) {
     if (e.faces != 2 || !e.consistent) continue;
-    const Index f0 = face_id.empty() ? e.face[0] : face_id[e.face[0]];
-    const Index f1 = face_id.empty() ? e.face[1] : face_id[e.face[1]];
+    const Index f0 = input_face(face_id, e.face[0]), f1 = input_face(face_id, e.face[1]);
     const Index f = std::min(f0, f1);
     across[3 * std::size_t(f) + s_.side(f, e.lo, e.hi)] = std::max(f0, f1);
   }
@@ -643,23 +645,26 @@ void Engine::push_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& 
       if (const auto e = rate_edge(a, b, lane.region, probes, &c)) lane.queue.push(*e), remember(*e, c);
     return;
   }
-  rate_edges(lane, edges, !scored_.empty());
+  lane.rated_candidates.resize(scored_.empty() ? 0 : n);
+  rate_edges(edges, lane.region, lane.rated, scored_.empty() ? nullptr : lane.rated_candidates.data());
   for (std::size_t i = 0; i < n; ++i)
-    if (const auto& e = lane.rated[i]) {
-      lane.queue.push(*e);
-      if (!scored_.empty()) remember(*e, lane.rated_candidates[i]);
+    if (const HeapEntry& e = lane.rated[i]; !unrated(e)) {
+      lane.queue.push(e);
+      if (!scored_.empty()) remember(e, lane.rated_candidates[i]);
     }
 }
 
-void Engine::rate_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& edges, bool keep) {
-  lane.rated.assign(edges.size(), std::nullopt);
-  lane.rated_candidates.resize(keep ? edges.size() : 0);
+void Engine::rate_edges(const std::vector<std::pair<Index, Index>>& edges, Index region, std::vector<HeapEntry>& out,
+                        Candidate* candidates) {
+  out.resize(edges.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), cost_->costly() ? 1 : 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       auto& probes = probes_.local();
-                      for (std::size_t i = r.begin(); i < r.end(); ++i)
-                        lane.rated[i] = rate_edge(edges[i].first, edges[i].second, lane.region, probes,
-                                                  keep ? &lane.rated_candidates[i] : nullptr);
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                        const auto e = rate_edge(edges[i].first, edges[i].second, region, probes,
+                                                 candidates ? &candidates[i] : nullptr);
+                        out[i] = e ? *e : HeapEntry{0, -1, -1, 0, 0};
+                      }
                     });
 }
 
@@ -768,19 +773,13 @@ std::optional<std::pair<Index, Index>> Engine::cheapest_boundary_collapse(Lane& 
 std::string Engine::stop_report(Index target, BlockedEdges& blocked) {
   // Classify every remaining edge by why it cannot collapse.
   std::size_t counts[static_cast<int>(Rejection::kCount)] = {};
-  std::vector<Index> ring;
-  Index remaining = 0;
-  for (Index p = 0; p < static_cast<Index>(s_.position.size()); ++p) {
-    if (s_.has(p, kRemoved)) continue;
-    neighbours(p, ring);
-    for (Index q : ring) {
-      if (q < p) continue;
-      ++remaining;
-      Candidate c;
-      const Rejection a = evaluate(main_, p, q, c, true), b = evaluate(main_, q, p, c, true);
-      // Report the more specific of the two directions' reasons.
-      counts[static_cast<int>(std::max(a, b))]++;
-    }
+  const std::vector<std::pair<Index, Index>> edges = remaining_edges();
+  const Index remaining = static_cast<Index>(edges.size());
+  for (const auto& [p, q] : edges) {
+    Candidate c;
+    const Rejection a = evaluate(main_, p, q, c, true), b = evaluate(main_, q, p, c, true);
+    // Report the more specific of the two directions' reasons.
+    counts[static_cast<int>(std::max(a, b))]++;
   }
   auto count = [&](Rejection r) { return static_cast<Index>(counts[static_cast<int>(r)]); };
   blocked.remaining = remaining;
@@ -985,17 +984,9 @@ std::vector<HeapEntry> Engine::rate_all(const std::vector<std::pair<Index, Index
   // beside them was 39 MiB more at the peak on a 1M-face mesh. (Their candidates are not kept: most
   // are re-scored before they reach the top, and keeping them all raised hoppe's peak on the horse by
   // 15 MiB, to 71.)
-  constexpr Index kNone = -1;
-  std::vector<HeapEntry> entries(edges.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), cost_->costly() ? 1 : 1024),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      auto& probes = probes_.local();
-                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                        const auto e = rate_edge(edges[i].first, edges[i].second, -1, probes);
-                        entries[i] = e ? *e : HeapEntry{0, kNone, kNone, 0, 0};
-                      }
-                    });
-  std::erase_if(entries, [](const HeapEntry& e) { return e.u == kNone; });
+  std::vector<HeapEntry> entries;
+  rate_edges(edges, -1, entries, nullptr);
+  std::erase_if(entries, unrated);
   return entries;
 }
 
