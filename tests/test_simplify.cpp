@@ -425,8 +425,9 @@ TEST(Simplify, NoFaceTurnsFurtherFromItsInputSelfThanTheTotalLimit) {
     o.method = method;
     o.target_ratio = 0.01;
     o.max_normal_change_deg = 30;
-    const double by_method = default_max_total_normal_change(method);
-    EXPECT_LE(largest_turn_deg(torus, simplify(torus, o)), by_method + 1e-3);
+    const SimplifyResult by_default = simplify(torus, o);
+    const double by_method = by_default.turn_limit_relaxed_at ? 90.0 : default_max_total_normal_change(method);
+    EXPECT_LE(largest_turn_deg(torus, by_default), by_method + 1e-3);
     for (const double total : {30.0, 45.0, 120.0}) {
       o.max_total_normal_change_deg = total;
       const double turn = largest_turn_deg(torus, simplify(torus, o));
@@ -436,6 +437,46 @@ TEST(Simplify, NoFaceTurnsFurtherFromItsInputSelfThanTheTotalLimit) {
       }
     }
   }
+}
+
+TEST(Simplify, TheDefaultTurnLimitGivesWayRatherThanStopShort) {
+  // To 24 faces of a torus, hoppe and edge-length stop at 30 and 26 under their default 60-degree limit on
+  // a face's turn from its input shape. Rather than stop there, the run goes on with 90 degrees, where no
+  // face faces against its input self; a limit the caller set stays put.
+  const Mesh torus = make_torus({});
+  for (const SimplifyMethod method : {SimplifyMethod::Hoppe, SimplifyMethod::EdgeLength}) {
+    SCOPED_TRACE(to_string(method));
+    SimplifyOptions o;
+    o.method = method;
+    o.target_faces = 24;
+    const SimplifyResult r = simplify(torus, o);
+    EXPECT_EQ(r.reason, StopReason::TargetReached) << r.reason_text;
+    EXPECT_EQ(r.faces_out, 24);
+    ASSERT_TRUE(r.turn_limit_relaxed_at.has_value());
+    EXPECT_GT(*r.turn_limit_relaxed_at, 24);
+    EXPECT_NE(r.reason_text.find("90 degrees"), std::string::npos) << r.reason_text;
+    const MeshReport report = inspect(r.mesh);
+    EXPECT_TRUE(report.manifold);
+    EXPECT_EQ(report.genus, 1);
+    EXPECT_LE(largest_turn_deg(torus, r), 90.0 + 1e-3);
+
+    o.max_total_normal_change_deg = 60;  // the same limit, set by the caller
+    const SimplifyResult kept = simplify(torus, o);
+    EXPECT_EQ(kept.faces_out, *r.turn_limit_relaxed_at);
+    EXPECT_FALSE(kept.turn_limit_relaxed_at.has_value());
+    EXPECT_EQ(kept.reason, StopReason::NoLegalCollapse);
+    EXPECT_GT(kept.blocked.flips, 0);
+    EXPECT_LE(largest_turn_deg(torus, kept), 60.0 + 1e-3);
+    // No face newly faces against the input (hoppe: none at all; edge-length's coarse tori cut through
+    // the tube at either limit).
+    EXPECT_LE(count_flipped_faces(torus, r.mesh), count_flipped_faces(torus, kept.mesh));
+    if (method == SimplifyMethod::Hoppe) EXPECT_EQ(count_flipped_faces(torus, r.mesh), 0);
+  }
+  // Where the default limit never stood in the way, nothing changes.
+  SimplifyOptions o;
+  o.method = SimplifyMethod::Hoppe;
+  o.target_faces = 48;
+  EXPECT_FALSE(simplify(torus, o).turn_limit_relaxed_at.has_value());
 }
 
 TEST(Simplify, FarFromTheOriginSimplifiesAsWellAsAtIt) {

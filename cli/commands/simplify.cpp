@@ -164,6 +164,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                                 r.reason == StopReason::ErrorLimit ? "error-limit" : "no-legal-collapse"},
                      {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}, {"lanes", r.lanes}};
     if (r.reason != StopReason::TargetReached) j["blocked"] = blocked_json(r.blocked);
+    if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
     if (hint) j["hint"] = *hint;
     if (measured)
       j["measured"] = {{"hausdorff", measured->hausdorff}, {"hausdorff_percent", measured->percent(measured->hausdorff)},
@@ -213,7 +214,8 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::Range(1.0, 180.0))->capture_default_str();
   sub->add_option("--max-total-normal-change", opt->max_total_normal_change,
                   "Largest turn of a face from its input orientation over all collapses, never below "
-                  "--max-normal-change (degrees; default 90 for quadric, 60 for hoppe and edge-length)")
+                  "--max-normal-change (degrees; default 90 for quadric, 60 for hoppe and edge-length, raised "
+                  "to 90 where 60 alone would stop the run short of its target; a value given here is kept)")
       ->check(CLI::Range(1.0, 180.0));
   sub->add_option("--crease-weight", opt->crease_weight,
                   "Weight of the planes that keep thin fins, spikes and sharp ridges (quadric; 0 = off)")

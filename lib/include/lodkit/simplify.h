@@ -70,7 +70,8 @@ struct SimplifyOptions {
   double max_normal_change_deg = 60.0;  ///< how far a face may turn in one collapse
   /// How far a face may turn from its input orientation over all collapses, so that small turns never
   /// add up to a flip; never below max_normal_change_deg. Unset: by method
-  /// (default_max_total_normal_change()).
+  /// (default_max_total_normal_change()), and raised to 90 degrees where that limit alone would stop the
+  /// run short of its target (SimplifyResult::turn_limit_relaxed_at).
   std::optional<double> max_total_normal_change_deg{};
   double min_triangle_quality = 0.02;   ///< 4 sqrt(3) area / sum of squared edges, for new triangles
   /// Attribute-aware quadrics (Garland & Heckbert 1998) for the attributes given a weight; the merged
@@ -158,6 +159,9 @@ struct SimplifyResult {
   Index locked_vertices = 0;        ///< on non-manifold edges or fans (or the boundary when locked)
   Index dropped_degenerate_faces = 0;
   int lanes = 1;                    ///< slabs simplified side by side first (see lane_faces), or 1
+  /// Faces left when the run, stuck above its target under the method's default limit on a face's turn
+  /// from its input shape, went on with 90 degrees (see max_total_normal_change_deg); unset if it did not.
+  std::optional<Index> turn_limit_relaxed_at;
   double seconds = 0.0;
   std::vector<Index> vertex_origin; ///< for each output vertex, its input vertex
   std::vector<Index> face_origin;   ///< for each output face, the input face it is (moved corners and all)
@@ -188,7 +192,8 @@ Index default_max_valence(SimplifyMethod method);
 /// unset: 90 degrees for quadric (no face ever faces against its input self; on the shared scans, CAD
 /// parts and attribute meshes at 10 % and 1 %, against 60: Hausdorff x0.977, RMS x0.952, and CAD parts
 /// that stopped short at 60 reach their targets), 60 for hoppe (90 there: Hausdorff x1.017, more
-/// flipped faces) and edge-length.
+/// flipped faces) and edge-length. Unset, the limit rises to 90 degrees when it alone would stop a run
+/// short of its target.
 double default_max_total_normal_change(SimplifyMethod method);
 
 std::string to_string(SimplifyMethod method);

@@ -85,8 +85,9 @@ class Engine {
       case SimplifyMethod::Hoppe: cost_ = make_hoppe_cost(o_, s_); break;
     }
     cos_max_turn_ = std::cos(o_.max_normal_change_deg * std::numbers::pi / 180.0);
-    const double total = o_.max_total_normal_change_deg.value_or(default_max_total_normal_change(o_.method));
-    cos_max_total_turn_ = std::cos(std::max(total, o_.max_normal_change_deg) * std::numbers::pi / 180.0);
+    total_turn_deg_ = std::max(o_.max_total_normal_change_deg.value_or(default_max_total_normal_change(o_.method)),
+                               o_.max_normal_change_deg);
+    cos_max_total_turn_ = std::cos(total_turn_deg_ * std::numbers::pi / 180.0);
     max_valence_ = o_.max_valence.value_or(default_max_valence(o_.method));
     if (cost_->costly()) scored_.resize(s_.position.size());
   }
@@ -205,6 +206,10 @@ class Engine {
   };
   std::vector<std::vector<Scored>> scored_;
   double cos_max_turn_ = 0, cos_max_total_turn_ = 0;
+  double total_turn_deg_ = 0;
+  /// Faces left when the default limit on a face's turn from its input shape was relaxed (relax_total_turn()).
+  std::optional<Index> relaxed_at_;
+  bool relax_total_turn();
   Index max_valence_ = 0;  // faces at a vertex, at most (0 = no limit; see SimplifyOptions::max_valence)
   std::vector<EdgeUse> edges_;  // every edge of the input, from setup() until run() has queued them
   std::vector<Index> canonical_;  // per input vertex: the first vertex identical to it
@@ -967,6 +972,19 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
   return entries;
 }
 
+// The default limit on a face's turn from its input shape (60 degrees for hoppe and edge-length) stops CAD
+// parts short of coarse targets: a face there comes to stand for a region across a 90-degree edge. Rather
+// than stop, the run goes on with 90 degrees, the most that never lets a face face against its input self.
+// A limit the caller set is kept. Runs that reach their target without it are unchanged.
+bool Engine::relax_total_turn() {
+  constexpr double kFlipBoundary = 90.0;
+  if (o_.max_total_normal_change_deg || total_turn_deg_ >= kFlipBoundary || !o_.preserve_topology) return false;
+  total_turn_deg_ = kFlipBoundary;
+  cos_max_total_turn_ = 0.0;  // cos 90
+  relaxed_at_ = s_.alive_faces;
+  return true;
+}
+
 std::vector<std::pair<Index, Index>> Engine::remaining_edges() {
   std::vector<std::pair<Index, Index>> edges;
   std::vector<Index>& ring = main_.ring;
@@ -1022,13 +1040,15 @@ SimplifyResult Engine::run(Index target) {
   // a collapse keeps one of its ends, so one that a collapse beside it made legal (a face there no
   // longer turns too far) was never queued again, and the run stopped short of a legal collapse. Rate
   // every edge left once more, and go on while that finds collapses.
+  // When nothing is left to collapse, a default limit on the turn from the input shape may still give way.
   while (!deferred && s_.alive_faces > target) {
     std::vector<HeapEntry> entries = rate_all(remaining_edges());
-    if (entries.empty()) break;
     const Index before = main_.collapses;
-    main_.queue.load(std::move(entries));
-    drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
-    if (main_.collapses == before) break;
+    if (!entries.empty()) {
+      main_.queue.load(std::move(entries));
+      drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
+    }
+    if (main_.collapses == before && !relax_total_turn()) break;
   }
   Candidate c;
   if (s_.alive_faces > target && deferred) {
@@ -1048,6 +1068,13 @@ SimplifyResult Engine::run(Index target) {
   } else {
     result.reason_text = stop_report(target, result.blocked);
     result.reason = result.blocked.error_limit > 0 ? StopReason::ErrorLimit : StopReason::NoLegalCollapse;
+  }
+  if (relaxed_at_) {
+    result.turn_limit_relaxed_at = *relaxed_at_;
+    result.reason_text += fmt::format("; faces were let turn up to {:g} degrees from their input shape from {} faces on, "
+                                      "where the default limit of {:g} held every collapse back",
+                                      total_turn_deg_, *relaxed_at_,
+                                      std::max(default_max_total_normal_change(o_.method), o_.max_normal_change_deg));
   }
 
   // Output: surviving faces in input order; surviving wedges in input order with their point's position.
