@@ -85,9 +85,7 @@ class Engine {
       case SimplifyMethod::Hoppe: cost_ = make_hoppe_cost(o_, s_); break;
     }
     cos_max_turn_ = std::cos(o_.max_normal_change_deg * std::numbers::pi / 180.0);
-    total_turn_deg_ = std::max(o_.max_total_normal_change_deg.value_or(default_max_total_normal_change(o_.method)),
-                               o_.max_normal_change_deg);
-    cos_max_total_turn_ = std::cos(total_turn_deg_ * std::numbers::pi / 180.0);
+    set_total_turn(starting_total_turn_deg());
     max_valence_ = o_.max_valence.value_or(default_max_valence(o_.method));
     if (cost_->costly()) scored_.resize(s_.position.size());
   }
@@ -209,6 +207,14 @@ class Engine {
   double total_turn_deg_ = 0;
   /// Faces left when the default limit on a face's turn from its input shape was relaxed (relax_total_turn()).
   std::optional<Index> relaxed_at_;
+  double starting_total_turn_deg() const {
+    return std::max(o_.max_total_normal_change_deg.value_or(default_max_total_normal_change(o_.method)),
+                    o_.max_normal_change_deg);
+  }
+  void set_total_turn(double deg) {
+    total_turn_deg_ = deg;
+    cos_max_total_turn_ = std::cos(deg * std::numbers::pi / 180.0);
+  }
   bool relax_total_turn();
   Index max_valence_ = 0;  // faces at a vertex, at most (0 = no limit; see SimplifyOptions::max_valence)
   std::vector<EdgeUse> edges_;  // every edge of the input, from setup() until run() has queued them
@@ -979,8 +985,7 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
 bool Engine::relax_total_turn() {
   constexpr double kFlipBoundary = 90.0;
   if (o_.max_total_normal_change_deg || total_turn_deg_ >= kFlipBoundary || !o_.preserve_topology) return false;
-  total_turn_deg_ = kFlipBoundary;
-  cos_max_total_turn_ = 0.0;  // cos 90
+  set_total_turn(kFlipBoundary);
   relaxed_at_ = s_.alive_faces;
   return true;
 }
@@ -1040,14 +1045,14 @@ SimplifyResult Engine::run(Index target) {
   // a collapse keeps one of its ends, so one that a collapse beside it made legal (a face there no
   // longer turns too far) was never queued again, and the run stopped short of a legal collapse. Rate
   // every edge left once more, and go on while that finds collapses.
-  // When nothing is left to collapse, a default limit on the turn from the input shape may still give way.
+  // When that finds none, a default limit on the turn from the input shape may still give way (the turn is
+  // checked at the top of the queue, not in rating: an empty rating leaves nothing for it to free).
   while (!deferred && s_.alive_faces > target) {
     std::vector<HeapEntry> entries = rate_all(remaining_edges());
+    if (entries.empty()) break;
     const Index before = main_.collapses;
-    if (!entries.empty()) {
-      main_.queue.load(std::move(entries));
-      drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
-    }
+    main_.queue.load(std::move(entries));
+    drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
     if (main_.collapses == before && !relax_total_turn()) break;
   }
   Candidate c;
@@ -1073,8 +1078,7 @@ SimplifyResult Engine::run(Index target) {
     result.turn_limit_relaxed_at = *relaxed_at_;
     result.reason_text += fmt::format("; faces were let turn up to {:g} degrees from their input shape from {} faces on, "
                                       "where the default limit of {:g} held every collapse back",
-                                      total_turn_deg_, *relaxed_at_,
-                                      std::max(default_max_total_normal_change(o_.method), o_.max_normal_change_deg));
+                                      total_turn_deg_, *relaxed_at_, starting_total_turn_deg());
   }
 
   // Output: surviving faces in input order; surviving wedges in input order with their point's position.
