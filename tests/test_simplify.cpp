@@ -470,7 +470,9 @@ TEST(Simplify, TheDefaultTurnLimitGivesWayRatherThanStopShort) {
     // No face newly faces against the input (hoppe: none at all; edge-length's coarse tori cut through
     // the tube at either limit).
     EXPECT_LE(count_flipped_faces(torus, r.mesh), count_flipped_faces(torus, kept.mesh));
-    if (method == SimplifyMethod::Hoppe) EXPECT_EQ(count_flipped_faces(torus, r.mesh), 0);
+    if (method == SimplifyMethod::Hoppe) {
+      EXPECT_EQ(count_flipped_faces(torus, r.mesh), 0);
+    }
   }
   // Where the default limit never stood in the way, nothing changes.
   SimplifyOptions o;
@@ -642,6 +644,31 @@ TEST(Simplify, HoppeHoldsOpenBoundariesToTheirCurves) {
   EXPECT_EQ(r.faces_out, r.target_faces);
   EXPECT_EQ(inspect(r.mesh).boundary_loops, 2);
   EXPECT_LT(compare(ring, r.mesh).hausdorff, 1e-9);  // every boundary vertex kept, in place
+}
+
+// A cylinder's rims are sharp edges between the side's long thin triangles and the caps' fans. Without
+// points along them E_dist sees a rim only through the few random points near it, and a collapse that
+// bevels it costs next to nothing: the farthest points were all on the rims (as on the shared
+// trimesh_counter at 10 %: Hausdorff 0.174 % without the rim points, 0.059 % with them). The floor on
+// the point count is off, as on a mesh of 25k faces or more.
+TEST(Simplify, HoppeSamplesSharpEdgesSoThatNoCollapseBevelsThem) {
+  const Mesh cylinder = make_cylinder({.radius = 1.0, .height = 0.5, .segments = 256, .stacks = 4});
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    SimplifyOptions o{.method = SimplifyMethod::Hoppe, .target_ratio = 0.25};
+    o.hoppe_min_points = 0;
+    o.seed = seed;
+    const SimplifyResult with = simplify(cylinder, o);
+    o.hoppe_crease_angle_deg = 180;  // no points along sharp edges
+    const SimplifyResult without = simplify(cylinder, o);
+    ASSERT_EQ(with.faces_out, with.target_faces);
+    ASSERT_EQ(without.faces_out, without.target_faces);
+    EXPECT_LT(compare(cylinder, with.mesh).hausdorff, 0.85 * compare(cylinder, without.mesh).hausdorff) << "seed " << seed;
+  }
+  SimplifyOptions bad{.method = SimplifyMethod::Hoppe};
+  for (const double angle : {-1.0, 181.0, std::nan("")}) {
+    bad.hoppe_crease_angle_deg = angle;
+    EXPECT_THROW(simplify(cylinder, bad), Error) << angle;
+  }
 }
 
 TEST(Simplify, IsDeterministic) {

@@ -30,6 +30,7 @@ struct SimplifyCliOptions {
   std::uint64_t seed = 1;
   double hoppe_samples = SimplifyOptions{}.hoppe_points_per_face;
   Index hoppe_min_points = SimplifyOptions{}.hoppe_min_points;
+  double hoppe_crease_angle = SimplifyOptions{}.hoppe_crease_angle_deg;
   Index lane_faces = -1;  // unset: by method
   Index max_valence = -1;  // unset: by method
   double max_total_normal_change = -1;  // unset: by method
@@ -136,6 +137,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   s.seed = o.seed;
   s.hoppe_points_per_face = o.hoppe_samples;
   s.hoppe_min_points = o.hoppe_min_points;
+  s.hoppe_crease_angle_deg = o.hoppe_crease_angle;
   if (o.lane_faces >= 0) s.lane_faces = o.lane_faces;
   if (o.max_valence >= 0) s.max_valence = o.max_valence;
   const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
@@ -236,6 +238,10 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--hoppe-min-points", opt->hoppe_min_points,
                   "hoppe: the fewest sample points in all; smaller meshes get more per face (0 = no floor)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--hoppe-crease-angle", opt->hoppe_crease_angle,
+                  "hoppe: input edges whose faces turn by more than this get points along them, so that a sharp "
+                  "edge cannot be bevelled unseen (degrees; 180 = none)")
+      ->check(CLI::Range(0.0, 180.0))->capture_default_str();
   sub->add_option("--lane-faces", opt->lane_faces,
                   "Meshes of twice this many faces are first simplified in slabs of about this many faces side by "
                   "side (0 = one queue throughout; default 125000 for quadric and edge-length, 8000 for hoppe)")

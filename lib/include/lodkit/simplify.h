@@ -89,6 +89,11 @@ struct SimplifyOptions {
   /// 10 %: 0.0158 % with 1 point per face, 0.0028 % with this floor; docs/benchmarks.md, "Session 13").
   /// Meshes of about 67k faces and more (the bunny) are not affected. 0 = no floor.
   Index hoppe_min_points = 100000;
+  /// Hoppe: input edges whose two faces turn by more than this (degrees) get points along them too,
+  /// about one per average edge length (E_dist sees a sharp edge only through the points near it, and
+  /// with a few random points per long thin CAD triangle a collapse could bevel it almost for free:
+  /// trimesh_counter at 10 %, Hausdorff 0.174 -> 0.059 %; docs/benchmarks.md, "Session 26"). 180 = none.
+  double hoppe_crease_angle_deg = 60.0;
   std::uint64_t seed = 1;
 
   /// Meshes of at least twice this many faces are first simplified in slabs of about this many faces,

@@ -1171,6 +1171,9 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
                             options.hoppe_points_per_face));
   if (options.hoppe_min_points < 0)
     throw Error(fmt::format("simplify: hoppe's minimum sample points must not be negative, got {}", options.hoppe_min_points));
+  if (!(options.hoppe_crease_angle_deg >= 0 && options.hoppe_crease_angle_deg <= 180))
+    throw Error(fmt::format("simplify: hoppe's crease angle must be between 0 and 180 degrees, got {}",
+                            options.hoppe_crease_angle_deg));
   Index target = 0;
   if (!options.target_faces && !options.target_ratio && !options.max_error) target = mesh.num_faces() / 2;
   if (options.target_faces) target = std::max(target, *options.target_faces);
