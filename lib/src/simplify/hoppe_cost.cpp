@@ -462,7 +462,7 @@ class HoppeCost final : public CostModel {
         const Eigen::Vector3f &n0 = s.face_normal0[f], &n1 = s.face_normal0[g];
         if (n0.squaredNorm() < 0.5f || n1.squaredNorm() < 0.5f || n0.dot(n1) >= cos_crease) continue;  // degenerate or smooth
         const Eigen::Vector3d pa = s.position[a], pb = s.position[b];
-        const int points = std::clamp(static_cast<int>((pb - pa).norm() / spacing), 1, kMostPerEdge);
+        const int points = std::max(1, static_cast<int>(std::min((pb - pa).norm() / spacing, double(kMostPerEdge))));
         for (int i = 1; i <= points; ++i) add_point(pa + (pb - pa) * (double(i) / (points + 1)), Index(f));
       }
     }
