@@ -97,6 +97,11 @@ class Engine {
   void setup_attributes(const Mesh& mesh);
   /// face_id: the face of each entry the edges name (empty: the same).
   void add_crease_planes(const std::vector<Index>& face_id);
+  void find_sharp_edges(const std::vector<Index>& face_id);
+  /// Per face side, the face across it if that one has the higher index, else -1: each interior edge
+  /// of two faces once, from its lower face (classify_edges found both faces already; a search per
+  /// edge was a fifth of the setup). With `consistent_only`, only faces that agree on orientation.
+  std::vector<Index> faces_across(const std::vector<Index>& face_id, bool consistent_only) const;
   // Checks are split by cost: the cheap ones (flags, shared faces, seam wedges) decide where the
   // surviving vertex may go and run whenever a candidate is scored; the link condition and the
   // geometric checks run once, when a candidate reaches the top of the queue.
@@ -352,6 +357,18 @@ void Engine::setup(const Mesh& mesh) {
     }
   }
   add_crease_planes(face_id);
+  find_sharp_edges(face_id);
+}
+
+std::vector<Index> Engine::faces_across(const std::vector<Index>& face_id, bool consistent_only) const {
+  std::vector<Index> across(3 * s_.face.size(), -1);
+  for (const EdgeUse& e : edges_) {
+    if (e.faces != 2 || (consistent_only && !e.consistent)) continue;
+    const Index f0 = input_face(face_id, e.face[0]), f1 = input_face(face_id, e.face[1]);
+    const Index f = std::min(f0, f1);
+    across[3 * std::size_t(f) + s_.side(f, e.lo, e.hi)] = std::max(f0, f1);
+  }
+  return across;
 }
 
 // Crease planes: the boundary constraint generalised to folded edges. Face planes alone leave a
@@ -364,16 +381,9 @@ void Engine::add_crease_planes(const std::vector<Index>& face_id) {
   // Quadric only: hoppe starts from the quadric's position but measures its own energy, and it kept
   // less Hausdorff with them (horse 10 %: 0.28 % against 0.14 %).
   if (o_.method != SimplifyMethod::Quadric || !(o_.crease_weight > 0)) return;
-  // Each interior edge of two consistently oriented faces, from the face of lower index, in face
-  // order: classify_edges found both faces already (a search per edge was a fifth of the setup).
+  // Each interior edge of two consistently oriented faces, from the face of lower index, in face order.
   const Index faces = static_cast<Index>(s_.face.size());
-  std::vector<Index> across(3 * static_cast<std::size_t>(faces), -1);  // per face side: the other face
-  for (const EdgeUse& e : edges_) {
-    if (e.faces != 2 || !e.consistent) continue;
-    const Index f0 = input_face(face_id, e.face[0]), f1 = input_face(face_id, e.face[1]);
-    const Index f = std::min(f0, f1);
-    across[3 * std::size_t(f) + s_.side(f, e.lo, e.hi)] = std::max(f0, f1);
-  }
+  const std::vector<Index> across = faces_across(face_id, true);
   for (Index f = 0; f < faces; ++f) {
     for (int k = 0; k < 3; ++k) {
       const Index other = across[3 * std::size_t(f) + k];
@@ -388,6 +398,20 @@ void Engine::add_crease_planes(const std::vector<Index>& face_id) {
       const Quadric q = Quadric::plane(m, -m.dot(a), weight);
       s_.quadric[p0] += q, s_.quadric[p1] += q;
     }
+  }
+}
+
+// Hoppe samples points along these (HoppeCost::sample_creases()): E_dist sees an edge only through the
+// points near it.
+void Engine::find_sharp_edges(const std::vector<Index>& face_id) {
+  if (o_.method != SimplifyMethod::Hoppe || o_.hoppe_crease_angle_deg >= 180) return;
+  const float cos_sharp = static_cast<float>(std::cos(o_.hoppe_crease_angle_deg * std::numbers::pi / 180.0));
+  const std::vector<Index> across = faces_across(face_id, false);
+  for (std::size_t i = 0; i < across.size(); ++i) {
+    if (across[i] < 0) continue;
+    const Eigen::Vector3f &n0 = s_.face_normal0[i / 3], &n1 = s_.face_normal0[across[i]];
+    if (n0.squaredNorm() < 0.5f || n1.squaredNorm() < 0.5f || n0.dot(n1) >= cos_sharp) continue;  // degenerate or smooth
+    s_.sharp_edges.push_back({static_cast<Index>(i / 3), static_cast<int>(i % 3)});
   }
 }
 

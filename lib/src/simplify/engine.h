@@ -44,6 +44,9 @@ struct EngineState {
   std::vector<Eigen::Vector3f> face_normal0;    ///< each face's unit normal in the input
   /// The input's boundary edges (one face each), as that face runs them, sorted.
   std::vector<std::pair<Index, Index>> input_boundary;
+  /// Hoppe: the input's interior edges whose faces turn by more than hoppe_crease_angle_deg, each as
+  /// (its face of lower index, that face's side), in face order.
+  std::vector<std::pair<Index, int>> sharp_edges;
   Index alive_faces = 0;
 
   /// Per-wedge attribute quadrics and values (scaled), when attribute weights are on.

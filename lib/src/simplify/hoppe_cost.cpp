@@ -15,7 +15,6 @@
 #include <bit>
 #include <iterator>
 #include <mutex>
-#include <numbers>
 #include <random>
 #include <unordered_map>
 #include <tbb/enumerable_thread_specific.h>
@@ -421,7 +420,7 @@ class HoppeCost final : public CostModel {
       }
     }
     sample_boundary(s);
-    sample_creases(s, o.hoppe_crease_angle_deg);
+    sample_creases(s);
   }
 
   // Two points per boundary edge: where it starts (in its face's order, so each boundary vertex once)
@@ -437,46 +436,25 @@ class HoppeCost final : public CostModel {
     }
   }
 
-  // Points along the input's sharp edges (their faces turn by more than `crease_deg`), about one per
-  // average edge length, each belonging to the edge's first face. E_dist sees an edge only through the
-  // points near it: with a few random points per long thin CAD triangle, a collapse that bevels a
-  // sharp edge moved almost none of them and cost next to nothing.
-  void sample_creases(const EngineState& s, double crease_deg) {
-    if (crease_deg >= 180) return;
-    const float cos_crease = static_cast<float>(std::cos(crease_deg * std::numbers::pi / 180.0));
+  // Points along the input's sharp edges (EngineState::sharp_edges), about one per average edge
+  // length, each belonging to the edge's lower face. E_dist sees an edge only through the points near
+  // it: with a few random points per long thin CAD triangle, a collapse that bevels a sharp edge moved
+  // almost none of them and cost next to nothing.
+  void sample_creases(const EngineState& s) {
+    if (s.sharp_edges.empty()) return;
     double length = 0;
     std::size_t sides = 0;
     for (std::size_t f = 0; f < s.face.size(); ++f)
       if (!s.face_dead[f])
         for (int k = 0; k < 3; ++k, ++sides)
           length += (s.position[s.corner_point(Index(f), k)] - s.position[s.corner_point(Index(f), (k + 1) % 3)]).norm();
-    if (sides == 0 || !(length > 0)) return;
     const double spacing = length / double(sides);
     constexpr int kMostPerEdge = 32;
-    for (std::size_t f = 0; f < s.face.size(); ++f) {
-      if (s.face_dead[f]) continue;
-      for (int k = 0; k < 3; ++k) {
-        const Index a = s.corner_point(Index(f), k), b = s.corner_point(Index(f), (k + 1) % 3);
-        const Index g = the_other_face(s, Index(f), a, b);
-        if (g < Index(f)) continue;  // a boundary or non-manifold edge (-1), or counted from g
-        const Eigen::Vector3f &n0 = s.face_normal0[f], &n1 = s.face_normal0[g];
-        if (n0.squaredNorm() < 0.5f || n1.squaredNorm() < 0.5f || n0.dot(n1) >= cos_crease) continue;  // degenerate or smooth
-        const Eigen::Vector3d pa = s.position[a], pb = s.position[b];
-        const int points = std::max(1, static_cast<int>(std::min((pb - pa).norm() / spacing, double(kMostPerEdge))));
-        for (int i = 1; i <= points; ++i) add_point(pa + (pb - pa) * (double(i) / (points + 1)), Index(f));
-      }
+    for (const auto& [f, k] : s.sharp_edges) {
+      const Eigen::Vector3d pa = s.position[s.corner_point(f, k)], pb = s.position[s.corner_point(f, (k + 1) % 3)];
+      const int points = std::max(1, static_cast<int>(std::min((pb - pa).norm() / spacing, double(kMostPerEdge))));
+      for (int i = 1; i <= points; ++i) add_point(pa + (pb - pa) * (double(i) / (points + 1)), f);
     }
-  }
-
-  // The one face other than f on edge ab, or -1 if there is none or more than one.
-  static Index the_other_face(const EngineState& s, Index f, Index a, Index b) {
-    Index other = -1;
-    for (Index g : s.faces_of(a))
-      if (g != f && s.side(g, a, b) >= 0) {
-        if (other >= 0) return -1;
-        other = g;
-      }
-    return other;
   }
 
   static double random_points_per_face(const SimplifyOptions& o, const EngineState& s) {
