@@ -209,6 +209,26 @@ TEST(CliSimplify, StoppingAtTheFlipLimitNamesTheOptionThatLiftsIt) {
   EXPECT_FALSE(nlohmann::json::parse(reached.out).contains("blocked"));
 }
 
+TEST(CliSimplify, FlatShadedInputNamesAndTakesRecomputeNormals) {
+  // Every edge of a flat-shaded mesh is a normal seam: the run stops at once and says which option
+  // lets it go; with it, the target is reached and the output has normals of its own.
+  test::ScratchDir dir("cli-simplify-flat");
+  write_mesh(test::flat_shaded(test::bumpy_sphere(3, 0.02)), (dir / "flat.ply").string());
+  const CliRun stuck = run(dir, "simplify flat.ply -o s.ply --faces 128 --json");
+  ASSERT_EQ(stuck.status, 0) << stuck.err;
+  const auto j = nlohmann::json::parse(stuck.out);
+  EXPECT_EQ(j["faces_out"].get<int>(), 1280);
+  EXPECT_GT(j["blocked"]["seams"].get<int>(), 0);
+  EXPECT_NE(j["hint"].get<std::string>().find("--recompute-normals"), std::string::npos) << j.dump();
+  const CliRun done = run(dir, "simplify flat.ply -o s.ply --faces 128 --recompute-normals");
+  ASSERT_EQ(done.status, 0) << done.err;
+  EXPECT_EQ(done.err.find("hint"), std::string::npos) << done.err;
+  const Mesh out = read_mesh((dir / "s.ply").string());
+  EXPECT_EQ(out.num_faces(), 128);
+  EXPECT_TRUE(out.has_normals());
+  EXPECT_TRUE(inspect(out).closed);
+}
+
 TEST(CliSimplify, TheTotalTurnLimitIsAnOptionToo) {
   // Held to 30 degrees from their input orientation, faces of a thin torus stop the run sooner than at
   // the default; outside 1..180 degrees the value is refused before anything is read.

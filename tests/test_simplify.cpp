@@ -287,6 +287,45 @@ TEST(Simplify, UvSeamsStayAligned) {
   EXPECT_TRUE(inspect(m).closed);
 }
 
+TEST(Simplify, FlatShadingIsNoSeamWhenNormalsAreRecomputed) {
+  // A normal per face corner splits every vertex, so every edge is a seam and nothing may collapse;
+  // recompute_normals welds the corners back, simplifies the shape and gives the output new normals.
+  const Mesh smooth = test::bumpy_sphere(3, 0.02);  // 1,280 faces, closed, genus 0
+  const Mesh flat = test::flat_shaded(smooth);
+  SimplifyOptions o;
+  o.target_faces = 128;
+  const SimplifyResult kept = simplify(flat, o);
+  EXPECT_EQ(kept.reason, StopReason::NoLegalCollapse);
+  EXPECT_EQ(kept.faces_out, flat.num_faces());
+  EXPECT_EQ(kept.blocked.seams, kept.blocked.remaining);
+
+  o.recompute_normals = true;
+  const SimplifyResult r = simplify(flat, o);
+  ASSERT_EQ(r.reason, StopReason::TargetReached) << r.reason_text;
+  EXPECT_EQ(r.faces_out, 128);
+  const MeshReport after = inspect(r.mesh);
+  EXPECT_TRUE(after.manifold && after.closed && after.oriented);
+  EXPECT_EQ(after.euler_characteristic, 2);
+  EXPECT_EQ(r.mesh.num_vertices(), 66);  // welded: V = F / 2 + 2
+  EXPECT_EQ(count_flipped_faces(smooth, r.mesh), 0);
+  // The output's normals are its own area-weighted vertex normals, unit length.
+  ASSERT_TRUE(r.mesh.has_normals());
+  const Normals expected = compute_vertex_normals(r.mesh);
+  for (Index v = 0; v < r.mesh.num_vertices(); ++v) {
+    EXPECT_NEAR(r.mesh.attributes.normals.row(v).norm(), 1.0, 1e-12);
+    EXPECT_LT((r.mesh.attributes.normals.row(v) - expected.row(v)).norm(), 1e-12) << "vertex " << v;
+  }
+  // As accurate as simplifying the welded mesh (the same shape; only tie-breaks between equal costs
+  // may differ, since the corners are numbered differently).
+  SimplifyOptions plain;
+  plain.target_faces = 128;
+  const double welded = compare(smooth, simplify(smooth, plain).mesh).hausdorff;
+  EXPECT_LT(compare(smooth, r.mesh).hausdorff, 1.1 * welded);
+
+  o.record_collapses = true;
+  EXPECT_THROW(simplify(flat, o), Error);
+}
+
 TEST(Simplify, LockedBoundaryStaysPutAndTheReasonIsGiven) {
   const Mesh grid = make_grid({.divisions_x = 10, .divisions_y = 10});
   SimplifyOptions o;

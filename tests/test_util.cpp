@@ -63,4 +63,23 @@ Mesh bumpy_sphere(int subdivisions, double amplitude, unsigned seed) {
   return m;
 }
 
+Mesh flat_shaded(const Mesh& mesh) {
+  Mesh flat;
+  const Index faces = mesh.num_faces();
+  flat.positions.resize(3 * faces, 3);
+  flat.triangles.resize(faces, 3);
+  flat.attributes.normals.resize(3 * faces, 3);
+  for (Index f = 0; f < faces; ++f) {
+    const Eigen::Vector3d a = mesh.positions.row(mesh.triangles(f, 0)), b = mesh.positions.row(mesh.triangles(f, 1)),
+                          c = mesh.positions.row(mesh.triangles(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+    for (int k = 0; k < 3; ++k) {
+      flat.positions.row(3 * f + k) = mesh.positions.row(mesh.triangles(f, k));
+      flat.attributes.normals.row(3 * f + k) = n.transpose();
+      flat.triangles(f, k) = 3 * f + k;
+    }
+  }
+  return flat;
+}
+
 }  // namespace lodkit::test

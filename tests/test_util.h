@@ -31,5 +31,7 @@ Mesh single_triangle();
 
 /// An icosphere with deterministic radial noise of +-amplitude (relative): a bumpy closed surface.
 Mesh bumpy_sphere(int subdivisions, double amplitude, unsigned seed = 7);
+/// The mesh flat-shaded: three vertices of its own per face, each with the face's unit normal.
+Mesh flat_shaded(const Mesh& mesh);
 
 }  // namespace lodkit::test

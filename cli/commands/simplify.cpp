@@ -22,7 +22,7 @@ struct SimplifyCliOptions {
   std::optional<double> ratio;
   std::optional<std::string> max_error;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
-  bool measure = false, json = false;
+  bool measure = false, json = false, recompute_normals = false;
   double max_normal_change = SimplifyOptions{}.max_normal_change_deg, crease_weight = SimplifyOptions{}.crease_weight;
   std::vector<double> attribute_weights;
   double feature_angle = 30.0, aspect_ratio = 0.1;
@@ -45,14 +45,19 @@ double parse_error(const std::string& text, double diagonal) {
 // When a rule with an option held edges back, name the option. Faces turning too far: CAD parts stop
 // short at the default 60 degrees (docs/commands/simplify.md, "CAD parts that stop short"). (Without
 // the checks, --allow-topology-change, nothing is blocked by flips.) The valence limit: a vertex with
-// many faces.
-std::optional<std::string> stop_hint(const SimplifyResult& r, const SimplifyCliOptions& o) {
+// many faces. Seams, where the input has normals: flat shading splits every vertex by its normals, and
+// then every edge is a seam.
+std::optional<std::string> stop_hint(const SimplifyResult& r, const SimplifyCliOptions& o, const Mesh& input) {
   if (r.reason == StopReason::TargetReached) return std::nullopt;
   std::string hint;
+  if (r.blocked.seams > 0 && input.has_normals() && !o.recompute_normals)
+    hint = fmt::format("{} of the {} edges left are attribute seams; where the input's normals split its vertices "
+                       "(flat shading), --recompute-normals ignores them and gives the output smooth normals",
+                       r.blocked.seams, r.blocked.remaining);
   if (r.blocked.valence > 0)
-    hint = fmt::format("{} of the {} edges left would give a vertex more faces than the valence limit; "
-                       "--max-valence 0 lifts it",
-                       r.blocked.valence, r.blocked.remaining);
+    hint += fmt::format("{}{} of the {} edges left would give a vertex more faces than the valence limit; "
+                        "--max-valence 0 lifts it",
+                        hint.empty() ? "" : "; ", r.blocked.valence, r.blocked.remaining);
   if (r.blocked.flips > 0 && o.max_normal_change < 90)
     hint += fmt::format("{}{} of the {} edges left would turn a face by more than {:g} degrees; --max-normal-change 90 "
                         "lets faces turn further, which often takes CAD parts closer to the target",
@@ -76,7 +81,8 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   d.feature_angle_deg = o.feature_angle;
   d.aspect_ratio = o.aspect_ratio;
   d.accumulate_error = o.accumulate_error;
-  const DecimateResult r = decimate(mesh, d);
+  DecimateResult r = decimate(mesh, d);
+  if (o.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
   std::optional<Comparison> measured;
   if (o.measure) measured = compare(mesh, r.mesh);
@@ -134,6 +140,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       throw Error("simplify: --attribute-weights takes three numbers: normals,uvs,colours");
     s.attribute_weights = {o.attribute_weights[0], o.attribute_weights[1], o.attribute_weights[2]};
   }
+  s.recompute_normals = o.recompute_normals;
   s.seed = o.seed;
   s.hoppe_points_per_face = o.hoppe_samples;
   s.hoppe_min_points = o.hoppe_min_points;
@@ -155,7 +162,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   std::optional<Comparison> measured;
   if (o.measure) measured = compare(mesh, r.mesh);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
-  const std::optional<std::string> hint = stop_hint(r, o);
+  const std::optional<std::string> hint = stop_hint(r, o, mesh);
   if (o.json) {
     nlohmann::json j{{"input", o.input}, {"output", o.output}, {"method", o.method},
                      {"faces_in", r.faces_in}, {"faces_out", r.faces_out}, {"vertices_in", r.vertices_in},
@@ -250,6 +257,8 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   "No collapse may leave a vertex with more faces around it than this, unless it had as many before "
                   "(0 = no limit; default 24 for hoppe, which otherwise grows hubs on flat parts; none for the others)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_flag("--recompute-normals", opt->recompute_normals,
+                "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
@@ -261,6 +270,7 @@ Examples:
   lodkit simplify part.obj -o part_lo.obj --method schroeder --max-error 0.05% --feature-angle 30
   lodkit simplify fandisk.obj -o fandisk_lo.ply --ratio 0.1 --method hoppe
   lodkit simplify counter.ply -o counter_lo.ply --ratio 0.01 --max-normal-change 90
+  lodkit simplify suzanne_flat.ply -o suzanne_lo.ply --ratio 0.1 --recompute-normals
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};
 }

@@ -77,6 +77,11 @@ struct SimplifyOptions {
   /// Attribute-aware quadrics (Garland & Heckbert 1998) for the attributes given a weight; the merged
   /// wedges then also take the attribute values that minimise the error.
   AttributeWeights attribute_weights{};
+  /// Ignore the input's normals and give the output area-weighted vertex normals instead. Vertices that
+  /// differ only by their normals then count as one, so a flat-shaded mesh (a normal per face corner,
+  /// which makes every edge an attribute seam and stops every collapse) simplifies like a welded one.
+  /// Not with record_collapses (the records would name vertices of a mesh without normals).
+  bool recompute_normals = false;
 
   /// Hoppe: random points sampled per input face (besides the vertices), at least; and the seed. Four
   /// start every neighbourhood past the paper's strongest springs (under 4 points per face), which on

@@ -1203,8 +1203,18 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   if (options.target_faces) target = std::max(target, *options.target_faces);
   if (options.target_ratio)
     target = std::max(target, static_cast<Index>(std::llround(*options.target_ratio * mesh.num_faces())));
-  detail::Engine engine(mesh, options);
-  SimplifyResult r = engine.run(target);
+  SimplifyResult r;
+  if (options.recompute_normals && mesh.has_normals()) {
+    if (options.record_collapses)
+      throw Error("simplify: recompute_normals cannot be combined with record_collapses");
+    // A copy without normals: the engine welds vertices that differed only by them.
+    Mesh positions_only = mesh;
+    positions_only.attributes.normals.resize(0, 3);
+    r = detail::Engine(positions_only, options).run(target);
+  } else {
+    r = detail::Engine(mesh, options).run(target);
+  }
+  if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
