@@ -29,6 +29,7 @@ struct SimplifyCliOptions {
   bool accumulate_error = false;
   std::uint64_t seed = 1;
   double hoppe_samples = SimplifyOptions{}.hoppe_points_per_face;
+  double hoppe_every_face = SimplifyOptions{}.hoppe_points_on_every_face;
   Index hoppe_min_points = SimplifyOptions{}.hoppe_min_points;
   double hoppe_crease_angle = SimplifyOptions{}.hoppe_crease_angle_deg;
   Index lane_faces = -1;  // unset: by method
@@ -143,6 +144,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   s.recompute_normals = o.recompute_normals;
   s.seed = o.seed;
   s.hoppe_points_per_face = o.hoppe_samples;
+  s.hoppe_points_on_every_face = o.hoppe_every_face;
   s.hoppe_min_points = o.hoppe_min_points;
   s.hoppe_crease_angle_deg = o.hoppe_crease_angle;
   if (o.lane_faces >= 0) s.lane_faces = o.lane_faces;
@@ -239,8 +241,12 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_flag("--accumulate-error", opt->accumulate_error, "schroeder: add each removal's error to its neighbours");
   sub->add_option("--seed", opt->seed, "Seed for hoppe's surface samples")->capture_default_str();
   sub->add_option("--hoppe-samples", opt->hoppe_samples,
-                  "hoppe: random surface points per face besides the vertices, at least (fewer than 4 leave "
+                  "hoppe: random surface points per face besides the vertices, on average (fewer than 4 leave "
                   "the springs strong: slow and less accurate on smooth meshes)")
+      ->check(CLI::Range(0.0, 1000.0))->capture_default_str();
+  sub->add_option("--hoppe-every-face", opt->hoppe_every_face,
+                  "hoppe: of those, how many go on every face however small; the rest are spread by area "
+                  "(default 2; 1000: all per face, as before session 27)")
       ->check(CLI::Range(0.0, 1000.0))->capture_default_str();
   sub->add_option("--hoppe-min-points", opt->hoppe_min_points,
                   "hoppe: the fewest sample points in all; smaller meshes get more per face (0 = no floor)")

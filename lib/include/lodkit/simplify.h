@@ -83,11 +83,17 @@ struct SimplifyOptions {
   /// Not with record_collapses (the records would name vertices of a mesh without normals).
   bool recompute_normals = false;
 
-  /// Hoppe: random points sampled per input face (besides the vertices), at least; and the seed. Four
+  /// Hoppe: random points sampled per input face on average (besides the vertices); and the seed. Four
   /// start every neighbourhood past the paper's strongest springs (under 4 points per face), which on
   /// smooth meshes outweigh the distances, grow the stars and slow the run (fertility at 10 %: 18.8 s
   /// with 1, 2.0 s with 4; docs/benchmarks.md, "Session 21").
   double hoppe_points_per_face = 4.0;
+  /// Hoppe: of those, how many go on every face, however small (E_dist must see each face of a fine
+  /// feature); the rest are spread over the surface by area, so that E_dist stands for the integral of
+  /// the squared distance over the input, which RMS measures. Points all per face (1000, as before
+  /// session 27) weight the energy by tessellation density, and on CAD parts the large faces hardly
+  /// count (46 shared runs: RMS x0.94 with 2, Hausdorff x1.00; docs/benchmarks.md, "Session 27").
+  double hoppe_points_on_every_face = 2.0;
   /// Hoppe: the fewest sample points in all (vertices plus random points); smaller meshes get more random
   /// points per face to reach it. With few points per face the paper's spring schedule keeps the springs
   /// strong, and on CAD meshes of long thin triangles they pull vertices off creases (fandisk's RMS at

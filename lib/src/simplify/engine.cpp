@@ -1193,6 +1193,9 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   if (!(options.hoppe_points_per_face >= 0 && options.hoppe_points_per_face <= 1000))
     throw Error(fmt::format("simplify: hoppe's random points per face must be between 0 and 1000, got {}",
                             options.hoppe_points_per_face));
+  if (!(options.hoppe_points_on_every_face >= 0 && options.hoppe_points_on_every_face <= 1000))
+    throw Error(fmt::format("simplify: hoppe's random points on every face must be between 0 and 1000, got {}",
+                            options.hoppe_points_on_every_face));
   if (options.hoppe_min_points < 0)
     throw Error(fmt::format("simplify: hoppe's minimum sample points must not be negative, got {}", options.hoppe_min_points));
   if (!(options.hoppe_crease_angle_deg >= 0 && options.hoppe_crease_angle_deg <= 180))

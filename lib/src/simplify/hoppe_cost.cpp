@@ -392,10 +392,17 @@ class HoppeScorer {
 class HoppeCost final : public CostModel {
  public:
   HoppeCost(const SimplifyOptions& o, const EngineState& s) {
-    // Points: every vertex position, plus random points on each face (seeded): `points_per_face`, or
-    // more where that falls short of `min_points` in all.
+    // Points: every vertex position, plus random points on the faces (seeded): `points_per_face` on
+    // average, or more where that falls short of `min_points` in all; `points_on_every_face` of them on
+    // every face, the rest spread by area (SimplifyOptions::hoppe_points_on_every_face says why).
     const Mesh& m = *s.input;
     const double per_face = random_points_per_face(o, s);
+    const double on_every_face = std::min(per_face, o.hoppe_points_on_every_face);
+    double area = 0;
+    std::size_t faces = 0;
+    for (std::size_t f = 0; f < s.face.size(); ++f)
+      if (!s.face_dead[f]) area += face_area(s, f), ++faces;
+    const double per_area = area > 0 ? (per_face - on_every_face) * double(faces) / area : 0.0;
     for (const Eigen::Vector3d& p : s.position) margin_ = std::max(margin_, p.cwiseAbs().maxCoeff());
     margin_ *= 1e-9;
     std::mt19937_64 rng(o.seed);
@@ -409,7 +416,7 @@ class HoppeCost final : public CostModel {
         const Index p = s.corner_point(Index(f), k);
         if (!placed[p]) placed[p] = 1, add_point(s.position[p], Index(f));
       }
-      carry += per_face;
+      carry += per_area > 0 ? on_every_face + per_area * face_area(s, f) : per_face;
       for (; carry >= 1.0; carry -= 1.0) {
         double a = unit(rng), b = unit(rng);
         if (a + b > 1) a = 1 - a, b = 1 - b;
@@ -455,6 +462,11 @@ class HoppeCost final : public CostModel {
       const int points = std::max(1, static_cast<int>(std::min((pb - pa).norm() / spacing, double(kMostPerEdge))));
       for (int i = 1; i <= points; ++i) add_point(pa + (pb - pa) * (double(i) / (points + 1)), f);
     }
+  }
+
+  static double face_area(const EngineState& s, std::size_t f) {
+    const Eigen::Vector3d& p0 = s.position[s.corner_point(Index(f), 0)];
+    return 0.5 * (s.position[s.corner_point(Index(f), 1)] - p0).cross(s.position[s.corner_point(Index(f), 2)] - p0).norm();
   }
 
   static double random_points_per_face(const SimplifyOptions& o, const EngineState& s) {
