@@ -324,6 +324,7 @@ TEST(Simplify, FlatShadingIsNoSeamWhenNormalsAreRecomputed) {
 
   o.record_collapses = true;
   EXPECT_THROW(simplify(flat, o), Error);
+  EXPECT_THROW(simplify(smooth, o), Error);  // refused whatever the mesh holds
 }
 
 TEST(Simplify, LockedBoundaryStaysPutAndTheReasonIsGiven) {

@@ -80,7 +80,8 @@ struct SimplifyOptions {
   /// Ignore the input's normals and give the output area-weighted vertex normals instead. Vertices that
   /// differ only by their normals then count as one, so a flat-shaded mesh (a normal per face corner,
   /// which makes every edge an attribute seam and stops every collapse) simplifies like a welded one.
-  /// Not with record_collapses (the records would name vertices of a mesh without normals).
+  /// A normal weight in attribute_weights then has nothing to weigh. Not with record_collapses (the
+  /// records would name vertices of a mesh without normals).
   bool recompute_normals = false;
 
   /// Hoppe: random points sampled per input face on average (besides the vertices); and the seed. Four

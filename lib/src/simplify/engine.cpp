@@ -1206,10 +1206,10 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   if (options.target_faces) target = std::max(target, *options.target_faces);
   if (options.target_ratio)
     target = std::max(target, static_cast<Index>(std::llround(*options.target_ratio * mesh.num_faces())));
+  if (options.recompute_normals && options.record_collapses)
+    throw Error("simplify: recompute_normals cannot be combined with record_collapses");
   SimplifyResult r;
   if (options.recompute_normals && mesh.has_normals()) {
-    if (options.record_collapses)
-      throw Error("simplify: recompute_normals cannot be combined with record_collapses");
     // A copy without normals: the engine welds vertices that differed only by them.
     Mesh positions_only = mesh;
     positions_only.attributes.normals.resize(0, 3);
