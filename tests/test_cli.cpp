@@ -356,6 +356,26 @@ TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
     EXPECT_NE(run(dir, cmd).out.find("Example"), std::string::npos) << cmd;
 }
 
+TEST(CliPm, FlatShadedInputNamesAndTakesDropNormals) {
+  // The normals of a flat-shaded mesh make every edge a seam: no collapse, so no splits. The build
+  // says so and names --drop-normals; with it the stream spans the shape's levels.
+  test::ScratchDir dir("cli-pm-flat");
+  write_mesh(test::flat_shaded(test::bumpy_sphere(3, 0.02)), (dir / "flat.ply").string());
+  const CliRun stuck = run(dir, "pm build flat.ply -o f.pm");
+  ASSERT_EQ(stuck.status, 0) << stuck.err;
+  EXPECT_NE(stuck.err.find("--drop-normals"), std::string::npos) << stuck.err;
+  const CliRun built = run(dir, "pm build flat.ply -o f.pm --drop-normals --json");
+  ASSERT_EQ(built.status, 0) << built.err;
+  const auto j = nlohmann::json::parse(built.out);
+  EXPECT_LE(j["base_faces"].get<int>(), 8);  // a closed genus-0 surface goes down to a tetrahedron or so
+  EXPECT_GE(j["splits"].get<int>(), 600);
+  ASSERT_EQ(run(dir, "pm extract f.pm -o top.ply --faces 1280").status, 0);
+  const Mesh top = read_mesh((dir / "top.ply").string());
+  EXPECT_EQ(top.num_faces(), 1280);
+  EXPECT_EQ(top.num_vertices(), 642);  // welded: the normals were what split the corners
+  EXPECT_FALSE(top.has_normals());
+}
+
 TEST(CliPm, BadStreamsAndOptionsFailClearly) {
   test::ScratchDir dir("cli-pm");
   ASSERT_EQ(run(dir, "generate torus -o t.ply").status, 0);

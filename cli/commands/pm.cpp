@@ -22,7 +22,7 @@ struct PmCliOptions {
   std::optional<std::string> format;
   std::optional<Index> base_faces;
   int quantize = 0;
-  bool draco = false, keep_order = false, json = false, measure = false;
+  bool draco = false, keep_order = false, json = false, measure = false, drop_normals = false;
   Index block = 1024;
   std::vector<double> attribute_weights;
   // extract / geomorph
@@ -35,7 +35,10 @@ struct PmCliOptions {
 };
 
 int run_build(const PmCliOptions& o, const GlobalOptions& global) {
-  const Mesh mesh = read_input(o.input, o.format);
+  Mesh mesh = read_input(o.input, o.format);
+  // Flat shading splits every vertex by its normals: every edge is then a seam and nothing collapses.
+  const bool had_normals = mesh.has_normals();
+  if (o.drop_normals) mesh.attributes.normals.resize(0, 3);
   refuse_to_overwrite(o.output, o.input);
   ProgressiveOptions p;
   p.simplify.method = *parse_method(o.method);
@@ -74,6 +77,10 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
                thousands(mesh.num_faces()), thousands(pm.num_faces(0)), thousands(pm.max_level()), build_seconds);
     if (o.measure)
       fmt::print(stderr, "  measured {} levels' distances to the input in {:.3f} s\n", pm.measured.size(), measure_seconds);
+    if (had_normals && !o.drop_normals && 2 * pm.num_faces(0) > mesh.num_faces())
+      fmt::print(stderr, "  hint: the base keeps {} of {} faces; where the input's normals split its vertices (flat "
+                         "shading) every edge is a seam, and --drop-normals builds without them\n",
+                 thousands(pm.num_faces(0)), thousands(mesh.num_faces()));
     fmt::print(stderr, "  {}: {} bytes ({:.1f} bits per input vertex; base {}, splits {}, order {}) written in {:.3f} s\n",
                o.output, thousands(static_cast<long long>(stats.total_bytes)), bits_per_vertex,
                thousands(static_cast<long long>(stats.base_bytes)), thousands(static_cast<long long>(stats.split_bytes)),
@@ -291,14 +298,17 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
   build->add_option("--block", opt->block, "Splits per checksummed block")->check(CLI::Range(1, 1 << 24))->capture_default_str();
   build->add_option("--attribute-weights", opt->attribute_weights, "Normal, UV and colour weights (quadric), e.g. 0,1,0")
       ->delimiter(',')->check(CLI::NonNegativeNumber);
+  build->add_flag("--drop-normals", opt->drop_normals,
+                  "Build without the input's normals (flat shading makes every edge a seam); levels then have none");
   build->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   build->footer(R"(Lossless streams reproduce the input exactly (positions bit for bit, same triangles in the
-same order); --quantize BITS gives a compact stream in stream order.
+same order; without its normals with --drop-normals); --quantize BITS gives a compact stream in stream order.
 Examples:
   lodkit pm build bunny.ply -o bunny.pm
   lodkit pm build scan.obj -o scan.pm --quantize 14 --draco --base-faces 500
   lodkit pm build spot.obj -o spot.pm --attribute-weights 0,1,0
-  lodkit pm build bunny.ply -o bunny.pm --measure   # pm extract --pixel-error then picks what a viewer needs)");
+  lodkit pm build bunny.ply -o bunny.pm --measure   # pm extract --pixel-error then picks what a viewer needs
+  lodkit pm build suzanne_flat.ply -o suzanne.pm --drop-normals   # flat shading: every edge a seam otherwise)");
 
   CLI::App* info = pm->add_subcommand("info", "Levels, sizes and error bounds of a .pm file");
   info->add_option("input", opt->input, "A .pm file")->required();
