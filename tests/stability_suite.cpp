@@ -35,15 +35,10 @@ Mesh two_boxes_sharing_an_edge() {
 
 Mesh unwelded_with_unreferenced() {
   // Every face with its own three vertices (a "soup" of a closed surface), plus stray vertices.
-  const Mesh s = bumpy_sphere(3, 0.01);
-  Mesh m;
-  m.positions.resize(3 * s.num_faces() + 5, 3);
-  m.triangles.resize(s.num_faces(), 3);
-  for (Index f = 0; f < s.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      m.positions.row(3 * f + k) = s.positions.row(s.triangles(f, k));
-      m.triangles(f, k) = 3 * f + k;
-    }
+  Mesh m = flat_shaded(bumpy_sphere(3, 0.01));
+  m.attributes.normals.resize(0, 3);
+  const Index n = m.num_vertices();
+  m.positions.conservativeResize(n + 5, 3);
   m.positions.bottomRows(5).setConstant(7.0);
   return m;
 }

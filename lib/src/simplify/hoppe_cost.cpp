@@ -399,10 +399,9 @@ class HoppeCost final : public CostModel {
     const double per_face = random_points_per_face(o, s);
     const double on_every_face = std::min(per_face, o.hoppe_points_on_every_face);
     double area = 0;
-    std::size_t faces = 0;
     for (std::size_t f = 0; f < s.face.size(); ++f)
-      if (!s.face_dead[f]) area += face_area(s, f), ++faces;
-    const double per_area = area > 0 ? (per_face - on_every_face) * double(faces) / area : 0.0;
+      if (!s.face_dead[f]) area += face_area(s, f);
+    const double per_area = area > 0 ? (per_face - on_every_face) * double(s.alive_faces) / area : 0.0;
     for (const Eigen::Vector3d& p : s.position) margin_ = std::max(margin_, p.cwiseAbs().maxCoeff());
     margin_ *= 1e-9;
     std::mt19937_64 rng(o.seed);
@@ -465,8 +464,8 @@ class HoppeCost final : public CostModel {
   }
 
   static double face_area(const EngineState& s, std::size_t f) {
-    const Eigen::Vector3d& p0 = s.position[s.corner_point(Index(f), 0)];
-    return 0.5 * (s.position[s.corner_point(Index(f), 1)] - p0).cross(s.position[s.corner_point(Index(f), 2)] - p0).norm();
+    const Index i = static_cast<Index>(f);
+    return triangle_area(s.position[s.corner_point(i, 0)], s.position[s.corner_point(i, 1)], s.position[s.corner_point(i, 2)]);
   }
 
   static double random_points_per_face(const SimplifyOptions& o, const EngineState& s) {
