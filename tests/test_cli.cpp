@@ -3,6 +3,7 @@
 #include <lodkit/inspect.h>
 #include <lodkit/io.h>
 #include <lodkit/metrics.h>
+#include <lodkit/primitives.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -227,6 +228,26 @@ TEST(CliSimplify, FlatShadedInputNamesAndTakesRecomputeNormals) {
   EXPECT_EQ(out.num_faces(), 128);
   EXPECT_TRUE(out.has_normals());
   EXPECT_TRUE(inspect(out).closed);
+}
+
+TEST(CliSimplify, NoInvertedFacesIsAnOptionAndMeasureCountsThem) {
+  // A lens 1/100 as thick as wide: --measure counts the faces facing against the input, which
+  // --no-inverted-faces leaves none of; held to 8 faces, it stops short and names itself.
+  test::ScratchDir dir("cli-simplify-inverted");
+  Mesh lens = make_icosphere({.subdivisions = 5});
+  lens.positions.col(2) *= 0.01;
+  write_mesh(lens, (dir / "lens.ply").string());
+  auto measured = [&](const std::string& extra) {
+    const CliRun r = run(dir, "simplify lens.ply -o s.ply --measure --json " + extra);
+    EXPECT_EQ(r.status, 0) << r.err;
+    return nlohmann::json::parse(r.out);
+  };
+  EXPECT_GT(measured("--ratio 0.03")["measured"]["inverted_faces"].get<int>(), 0);
+  EXPECT_EQ(measured("--ratio 0.03 --no-inverted-faces")["measured"]["inverted_faces"].get<int>(), 0);
+  const auto stuck = measured("--faces 8 --no-inverted-faces");
+  EXPECT_GT(stuck["faces_out"].get<int>(), 8);
+  EXPECT_GT(stuck["blocked"]["inverted"].get<int>(), 0);
+  EXPECT_NE(stuck["hint"].get<std::string>().find("--no-inverted-faces"), std::string::npos) << stuck.dump();
 }
 
 TEST(CliSimplify, TheTotalTurnLimitIsAnOptionToo) {

@@ -738,6 +738,48 @@ TEST(Simplify, HoppeSamplesSharpEdgesSoThatNoCollapseBevelsThem) {
   }
 }
 
+// A lens one hundredth as thick as it is wide: a coarse face there lies nearer the far side than its
+// own, and the plain checks (each face against its own input shape) let some face the wrong way.
+Mesh thin_lens() {
+  Mesh lens = make_icosphere({.subdivisions = 5});
+  lens.positions.col(2) *= 0.01;
+  return lens;
+}
+
+TEST(Simplify, NoInvertedFacesLeavesNoneOnAThinLens) {
+  const Mesh lens = thin_lens();
+  SimplifyOptions o;
+  o.target_ratio = 0.03;
+  const SimplifyResult plain = simplify(lens, o);
+  ASSERT_GT(count_flipped_faces(lens, plain.mesh), 0) << "the lens no longer shows the failure this test guards";
+  o.no_inverted_faces = true;
+  for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe}) {
+    SCOPED_TRACE(static_cast<int>(method));
+    o.method = method;
+    const SimplifyResult r = simplify(lens, o);
+    EXPECT_EQ(r.reason, StopReason::TargetReached) << r.reason_text;
+    EXPECT_EQ(count_flipped_faces(lens, r.mesh), 0);
+    const MeshReport after = inspect(r.mesh);
+    EXPECT_TRUE(after.manifold);
+    EXPECT_EQ(after.euler_characteristic, 2);
+  }
+}
+
+TEST(Simplify, NoInvertedFacesSaysWhenItStopsShort) {
+  // Down to a tetrahedron, a lens this thin must fold a face across: the run stops short and counts the
+  // edges that rule held back.
+  const Mesh lens = thin_lens();
+  SimplifyOptions o;
+  o.target_faces = 8;
+  o.no_inverted_faces = true;
+  const SimplifyResult r = simplify(lens, o);
+  EXPECT_EQ(r.reason, StopReason::NoLegalCollapse);
+  EXPECT_GT(r.faces_out, 8);
+  EXPECT_GT(r.blocked.inverted, 0);
+  EXPECT_NE(r.reason_text.find("face against the input"), std::string::npos) << r.reason_text;
+  EXPECT_EQ(count_flipped_faces(lens, r.mesh), 0);
+}
+
 TEST(Simplify, IsDeterministic) {
   const Mesh m = test::bumpy_sphere(4, 0.02);
   SimplifyOptions o;

@@ -22,7 +22,7 @@ struct SimplifyCliOptions {
   std::optional<double> ratio;
   std::optional<std::string> max_error;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
-  bool measure = false, json = false, recompute_normals = false;
+  bool measure = false, json = false, recompute_normals = false, no_inverted_faces = false;
   double max_normal_change = SimplifyOptions{}.max_normal_change_deg, crease_weight = SimplifyOptions{}.crease_weight;
   std::vector<double> attribute_weights;
   double feature_angle = 30.0, aspect_ratio = 0.1;
@@ -63,13 +63,17 @@ std::optional<std::string> stop_hint(const SimplifyResult& r, const SimplifyCliO
     hint += fmt::format("{}{} of the {} edges left would turn a face by more than {:g} degrees; --max-normal-change 90 "
                         "lets faces turn further, which often takes CAD parts closer to the target",
                         hint.empty() ? "" : "; ", r.blocked.flips, r.blocked.remaining, o.max_normal_change);
+  if (r.blocked.inverted > 0)
+    hint += fmt::format("{}{} of the {} edges left would leave a face facing against the input; without "
+                        "--no-inverted-faces the run goes on, and may leave some",
+                        hint.empty() ? "" : "; ", r.blocked.inverted, r.blocked.remaining);
   if (hint.empty()) return std::nullopt;
   return hint + " (docs/commands/simplify.md)";
 }
 
 nlohmann::json blocked_json(const BlockedEdges& b) {
   return {{"remaining", b.remaining}, {"locked", b.locked},   {"topology", b.topology},
-          {"boundary", b.boundary},   {"seams", b.seams},     {"flips", b.flips},
+          {"boundary", b.boundary},   {"seams", b.seams},     {"flips", b.flips},       {"inverted", b.inverted},
           {"slivers", b.slivers},     {"valence", b.valence},     {"error_limit", b.error_limit},
           {"cost", b.cost}};
 }
@@ -86,7 +90,8 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   if (o.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
   std::optional<Comparison> measured;
-  if (o.measure) measured = compare(mesh, r.mesh);
+  Index inverted = 0;  // measured: faces facing against the nearest input face
+  if (o.measure) measured = compare(mesh, r.mesh), inverted = count_flipped_faces(mesh, r.mesh);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
   const auto& c = r.remaining_by_class;
   if (o.json) {
@@ -100,7 +105,8 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
                                     {"no_triangulation", r.remaining_no_triangulation}}}};
     if (measured)
       j["measured"] = {{"hausdorff", measured->hausdorff}, {"hausdorff_percent", measured->percent(measured->hausdorff)},
-                       {"rms", measured->rms}, {"rms_percent", measured->percent(measured->rms)}};
+                       {"rms", measured->rms}, {"rms_percent", measured->percent(measured->rms)},
+                       {"inverted_faces", inverted}};
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
     fmt::print(stderr, "simplify (schroeder): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", thousands(r.faces_in),
@@ -108,8 +114,9 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
     fmt::print(stderr, "  largest removal error {:.6g} ({:.4f}% of the diagonal){}\n", r.error, r.error * pct,
                d.accumulate_error ? ", accumulated" : "");
     if (measured)
-      fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%)\n", measured->hausdorff,
-                 measured->percent(measured->hausdorff), measured->rms, measured->percent(measured->rms));
+      fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%), {} faces facing against the input\n",
+                 measured->hausdorff, measured->percent(measured->hausdorff), measured->rms,
+                 measured->percent(measured->rms), inverted);
     fmt::print(stderr, "  {}\n", r.reason_text);
   }
   return 0;
@@ -142,6 +149,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     s.attribute_weights = {o.attribute_weights[0], o.attribute_weights[1], o.attribute_weights[2]};
   }
   s.recompute_normals = o.recompute_normals;
+  s.no_inverted_faces = o.no_inverted_faces;
   s.seed = o.seed;
   s.hoppe_points_per_face = o.hoppe_samples;
   s.hoppe_points_on_every_face = o.hoppe_every_face;
@@ -162,7 +170,8 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
 
   std::optional<Comparison> measured;
-  if (o.measure) measured = compare(mesh, r.mesh);
+  Index inverted = 0;  // measured: faces facing against the nearest input face
+  if (o.measure) measured = compare(mesh, r.mesh), inverted = count_flipped_faces(mesh, r.mesh);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
   const std::optional<std::string> hint = stop_hint(r, o, mesh);
   if (o.json) {
@@ -180,7 +189,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     if (measured)
       j["measured"] = {{"hausdorff", measured->hausdorff}, {"hausdorff_percent", measured->percent(measured->hausdorff)},
                        {"rms", measured->rms}, {"rms_percent", measured->percent(measured->rms)},
-                       {"mean", measured->mean}, {"normal_deviation_mean_deg",
+                       {"mean", measured->mean}, {"inverted_faces", inverted}, {"normal_deviation_mean_deg",
                         0.5 * (measured->a_to_b.normal_deviation_mean_deg + measured->b_to_a.normal_deviation_mean_deg)}};
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
@@ -190,8 +199,9 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
     if (r.lanes > 1) fmt::print(stderr, "  {} slabs simplified side by side, then one queue for the rest\n", r.lanes);
     if (measured)
-      fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%)\n", measured->hausdorff,
-                 measured->percent(measured->hausdorff), measured->rms, measured->percent(measured->rms));
+      fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%), {} faces facing against the input\n",
+                 measured->hausdorff, measured->percent(measured->hausdorff), measured->rms,
+                 measured->percent(measured->rms), inverted);
     fmt::print(stderr, "  {}\n", r.reason_text);
     if (hint) fmt::print(stderr, "  hint: {}\n", *hint);
   }
@@ -265,6 +275,9 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
+  sub->add_flag("--no-inverted-faces", opt->no_inverted_faces,
+                "Refuse collapses that leave a face facing against the nearest input face, so the output has none "
+                "(about 3x slower on scans; may stop short of the target, and says so)");
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
@@ -277,6 +290,7 @@ Examples:
   lodkit simplify fandisk.obj -o fandisk_lo.ply --ratio 0.1 --method hoppe
   lodkit simplify counter.ply -o counter_lo.ply --ratio 0.01 --max-normal-change 90
   lodkit simplify suzanne_flat.ply -o suzanne_lo.ply --ratio 0.1 --recompute-normals
+  lodkit simplify horse.ply -o horse_lo.ply --ratio 0.1 --no-inverted-faces --measure
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};
 }

@@ -14,6 +14,7 @@
 
 #include "core/geometry.h"
 #include "core/topology.h"
+#include "metrics/aabb_tree.h"
 #include "simplify/engine.h"
 #include "simplify/queue.h"
 #include "simplify/slabs.h"
@@ -24,7 +25,7 @@ namespace detail {
 namespace {
 
 // Why a candidate collapse was refused. The final report counts these over the edges left.
-enum class Rejection { None, Locked, Topology, Boundary, Seam, Valence, Flip, Sliver, ErrorLimit, Cost, kCount };
+enum class Rejection { None, Locked, Topology, Boundary, Seam, Valence, Flip, Inverted, Sliver, ErrorLimit, Cost, kCount };
 
 // At most this many lanes (slabs simplified side by side; see Engine::run_lanes).
 constexpr Index kMaxLanes = 8;
@@ -88,6 +89,7 @@ class Engine {
     set_total_turn(starting_total_turn_deg());
     max_valence_ = o_.max_valence.value_or(default_max_valence(o_.method));
     if (cost_->costly()) scored_.resize(s_.position.size());
+    if (o_.no_inverted_faces && o_.preserve_topology) input_tree_ = std::make_unique<AabbTree>(mesh);
   }
 
   SimplifyResult run(Index target);
@@ -113,6 +115,13 @@ class Engine {
   Rejection map_wedges(Index u, Index v, Probe& probe) const;
   Index wedge_at(Index f, Index p) const;
   Rejection geometry(Index u, Index v, const Eigen::Vector3d& p);
+  /// Whether face f, with corners `corners` and normal n, faces against the input face nearest its
+  /// centroid (as count_flipped_faces() sees it). Face f is input face f: the search starts there.
+  bool faces_against_input(Index f, const Eigen::Vector3d* corners, const Eigen::Vector3d& n) const {
+    const Eigen::Vector3d centroid = (corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin;
+    const AabbTree::Hit hit = input_tree_->closest(centroid, f);
+    return hit.face >= 0 && n.dot(s_.face_normal0[hit.face].cast<double>()) < 0;
+  }
   /// The checks and the cost of u -> v, into lane.probe (the path that collapses). With `scored`, c
   /// already holds the cost of u -> v in the current state (recall()) and is not computed again.
   Rejection evaluate(Lane& lane, Index u, Index v, Candidate& c, bool full, bool scored = false);
@@ -195,6 +204,7 @@ class Engine {
 
   SimplifyOptions o_;
   EngineState s_;
+  std::unique_ptr<AabbTree> input_tree_;  // with no_inverted_faces: the input, for the face nearest a new face
   std::unique_ptr<CostModel> cost_;
   Lane main_;  // the whole run's, or the last part's after the lanes
   std::vector<std::uint32_t> version_;
@@ -596,6 +606,7 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
       // must not add up to a flip over many collapses.
       if (l0 > 0 && n1.dot(n0) < cos_max_turn_ * l0 * l1) return Rejection::Flip;
       if (n1.dot(s_.face_normal0[f].cast<double>()) < cos_max_total_turn_ * l1) return Rejection::Flip;
+      if (input_tree_ && faces_against_input(f, after, n1)) return Rejection::Inverted;
       auto quality = [&](const Eigen::Vector3d* t, double twice_area) {
         const double sum = (t[1] - t[0]).squaredNorm() + (t[2] - t[1]).squaredNorm() + (t[0] - t[2]).squaredNorm();
         return sum > 0 ? kQualityScale * 0.5 * twice_area / sum : 0.0;
@@ -821,10 +832,12 @@ std::string Engine::stop_report(Index target, BlockedEdges& blocked) {
   blocked.locked = count(Rejection::Locked), blocked.topology = count(Rejection::Topology);
   blocked.boundary = count(Rejection::Boundary), blocked.seams = count(Rejection::Seam);
   blocked.valence = count(Rejection::Valence);
-  blocked.flips = count(Rejection::Flip), blocked.slivers = count(Rejection::Sliver);
+  blocked.flips = count(Rejection::Flip), blocked.inverted = count(Rejection::Inverted);
+  blocked.slivers = count(Rejection::Sliver);
   blocked.error_limit = count(Rejection::ErrorLimit), blocked.cost = count(Rejection::Cost);
   const char* names[] = {"", "locked (non-manifold or locked boundary) vertices", "topology (link condition)",
-                         "boundary rules", "attribute seams", "the valence limit", "face flips", "slivers",
+                         "boundary rules", "attribute seams", "the valence limit", "face flips",
+                         "faces that would face against the input (no_inverted_faces)", "slivers",
                          "the error limit", "the cost"};
   std::string why;
   for (int r = 1; r < static_cast<int>(Rejection::kCount); ++r)
