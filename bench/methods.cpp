@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <sstream>
+#include <string_view>
 
 namespace lodkit::bench {
 namespace {
@@ -41,10 +42,14 @@ PeerRun run_method(const std::string& method, const Mesh& mesh, Index target) {
     DecimateResult r = decimate(mesh, {.target_faces = target});
     return {std::move(r.mesh), seconds_since(t0)};
   }
-  const auto parsed = parse_method(method);
+  // "quadric-no-inverted": the method with SimplifyOptions::no_inverted_faces.
+  constexpr std::string_view kNoInverted = "-no-inverted";
+  const bool no_inverted = method.ends_with(kNoInverted);
+  const auto parsed = parse_method(no_inverted ? method.substr(0, method.size() - kNoInverted.size()) : method);
   if (!parsed) throw Error("unknown method " + method);
   SimplifyOptions o;
   o.method = *parsed;
+  o.no_inverted_faces = no_inverted;
   o.target_faces = target;
   SimplifyResult r = simplify(mesh, o);
   return {std::move(r.mesh), seconds_since(t0)};

@@ -12,7 +12,9 @@ namespace lodkit::bench {
 const std::vector<std::string>& all_methods();
 
 /// Simplifies `mesh` to `target` faces with `method`; the time is the simplification call only
-/// (for `pm`: building the progressive mesh plus extracting the level). Throws on an unknown name.
+/// (for `pm`: building the progressive mesh plus extracting the level). lodkit's edge-collapse methods
+/// also take the suffix "-no-inverted" (SimplifyOptions::no_inverted_faces, not among all_methods()).
+/// Throws on an unknown name.
 PeerRun run_method(const std::string& method, const Mesh& mesh, Index target);
 
 /// "a,b,c" -> {"a", "b", "c"} (command-line lists).

@@ -116,11 +116,20 @@ class Engine {
   Index wedge_at(Index f, Index p) const;
   Rejection geometry(Index u, Index v, const Eigen::Vector3d& p);
   /// Whether face f, with corners `corners` and normal n, faces against the input face nearest its
-  /// centroid (as count_flipped_faces() sees it). Face f is input face f: the search starts there.
+  /// centroid (as count_flipped_faces() sees it), where in the input it did not. Face f is input face f:
+  /// the search starts there. (Double-sided input, two faces back to back, has faces that face against
+  /// their twin from the start; holding them would hold their whole neighbourhood.)
   bool faces_against_input(Index f, const Eigen::Vector3d* corners, const Eigen::Vector3d& n) const {
-    const Eigen::Vector3d centroid = (corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin;
-    const AabbTree::Hit hit = input_tree_->closest(centroid, f);
-    return hit.face >= 0 && n.dot(s_.face_normal0[hit.face].cast<double>()) < 0;
+    auto against = [&](const Eigen::Vector3d& centroid, const Eigen::Vector3d& normal) {
+      const AabbTree::Hit hit = input_tree_->closest(centroid, f);
+      return hit.face >= 0 && normal.dot(s_.face_normal0[hit.face].cast<double>()) < 0;
+    };
+    if (!against((corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin, n)) return false;
+    const Mesh& in = *s_.input;
+    const Eigen::Vector3d input_centroid =
+        (in.positions.row(in.triangles(f, 0)) + in.positions.row(in.triangles(f, 1)) + in.positions.row(in.triangles(f, 2)))
+            .transpose() / 3.0;
+    return !against(input_centroid, s_.face_normal0[f].cast<double>());
   }
   /// The checks and the cost of u -> v, into lane.probe (the path that collapses). With `scored`, c
   /// already holds the cost of u -> v in the current state (recall()) and is not computed again.
