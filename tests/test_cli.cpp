@@ -3,7 +3,6 @@
 #include <lodkit/inspect.h>
 #include <lodkit/io.h>
 #include <lodkit/metrics.h>
-#include <lodkit/primitives.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -234,9 +233,7 @@ TEST(CliSimplify, NoInvertedFacesIsAnOptionAndMeasureCountsThem) {
   // A lens 1/100 as thick as wide: --measure counts the faces facing against the input, which
   // --no-inverted-faces leaves none of; held to 8 faces, it stops short and names itself.
   test::ScratchDir dir("cli-simplify-inverted");
-  Mesh lens = make_icosphere({.subdivisions = 5});
-  lens.positions.col(2) *= 0.01;
-  write_mesh(lens, (dir / "lens.ply").string());
+  write_mesh(test::thin_lens(), (dir / "lens.ply").string());
   auto measured = [&](const std::string& extra) {
     const CliRun r = run(dir, "simplify lens.ply -o s.ply --measure --json " + extra);
     EXPECT_EQ(r.status, 0) << r.err;

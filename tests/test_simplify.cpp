@@ -738,16 +738,8 @@ TEST(Simplify, HoppeSamplesSharpEdgesSoThatNoCollapseBevelsThem) {
   }
 }
 
-// A lens one hundredth as thick as it is wide: a coarse face there lies nearer the far side than its
-// own, and the plain checks (each face against its own input shape) let some face the wrong way.
-Mesh thin_lens() {
-  Mesh lens = make_icosphere({.subdivisions = 5});
-  lens.positions.col(2) *= 0.01;
-  return lens;
-}
-
 TEST(Simplify, NoInvertedFacesLeavesNoneOnAThinLens) {
-  const Mesh lens = thin_lens();
+  const Mesh lens = test::thin_lens();
   SimplifyOptions o;
   o.target_ratio = 0.03;
   const SimplifyResult plain = simplify(lens, o);
@@ -768,7 +760,7 @@ TEST(Simplify, NoInvertedFacesLeavesNoneOnAThinLens) {
 TEST(Simplify, NoInvertedFacesSaysWhenItStopsShort) {
   // Down to a tetrahedron, a lens this thin must fold a face across: the run stops short and counts the
   // edges that rule held back.
-  const Mesh lens = thin_lens();
+  const Mesh lens = test::thin_lens();
   SimplifyOptions o;
   o.target_faces = 8;
   o.no_inverted_faces = true;

@@ -63,6 +63,12 @@ Mesh bumpy_sphere(int subdivisions, double amplitude, unsigned seed) {
   return m;
 }
 
+Mesh thin_lens() {
+  Mesh lens = make_icosphere({.subdivisions = 5});
+  lens.positions.col(2) *= 0.01;
+  return lens;
+}
+
 Mesh flat_shaded(const Mesh& mesh) {
   Mesh flat;
   const Index faces = mesh.num_faces();

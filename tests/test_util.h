@@ -33,5 +33,8 @@ Mesh single_triangle();
 Mesh bumpy_sphere(int subdivisions, double amplitude, unsigned seed = 7);
 /// The mesh flat-shaded: three vertices of its own per face, each with the face's unit normal.
 Mesh flat_shaded(const Mesh& mesh);
+/// A lens 1/100 as thick as it is wide (a flattened icosphere, 20,480 faces): a coarse face there lies
+/// nearer the far side than its own, where the plain flip checks let some face the wrong way.
+Mesh thin_lens();
 
 }  // namespace lodkit::test
