@@ -78,6 +78,29 @@ nlohmann::json blocked_json(const BlockedEdges& b) {
           {"cost", b.cost}};
 }
 
+// --measure, for every method: lodkit compare's distances, and the faces facing against the input face
+// nearest their centroid (what SimplifyOptions::no_inverted_faces rules out).
+struct Measured {
+  Comparison distances;
+  Index inverted_faces = 0;
+};
+
+Measured measure(const Mesh& input, const Mesh& output) {
+  return {compare(input, output), count_flipped_faces(input, output)};
+}
+
+nlohmann::json measured_json(const Measured& m) {
+  const Comparison& c = m.distances;
+  return {{"hausdorff", c.hausdorff}, {"hausdorff_percent", c.percent(c.hausdorff)}, {"rms", c.rms},
+          {"rms_percent", c.percent(c.rms)}, {"inverted_faces", m.inverted_faces}};
+}
+
+void print_measured(const Measured& m) {
+  const Comparison& c = m.distances;
+  fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%), {} faces facing against the input\n",
+             c.hausdorff, c.percent(c.hausdorff), c.rms, c.percent(c.rms), m.inverted_faces);
+}
+
 int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {
   DecimateOptions d;
   d.target_faces = o.faces;
@@ -89,9 +112,8 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   DecimateResult r = decimate(mesh, d);
   if (o.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
-  std::optional<Comparison> measured;
-  Index inverted = 0;  // measured: faces facing against the nearest input face
-  if (o.measure) measured = compare(mesh, r.mesh), inverted = count_flipped_faces(mesh, r.mesh);
+  std::optional<Measured> measured;
+  if (o.measure) measured = measure(mesh, r.mesh);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
   const auto& c = r.remaining_by_class;
   if (o.json) {
@@ -103,20 +125,14 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
                      {"remaining", {{"simple", c[0]}, {"complex", c[1]}, {"boundary", c[2]}, {"interior_edge", c[3]},
                                     {"corner", c[4]}, {"above_threshold", r.remaining_above_threshold},
                                     {"no_triangulation", r.remaining_no_triangulation}}}};
-    if (measured)
-      j["measured"] = {{"hausdorff", measured->hausdorff}, {"hausdorff_percent", measured->percent(measured->hausdorff)},
-                       {"rms", measured->rms}, {"rms_percent", measured->percent(measured->rms)},
-                       {"inverted_faces", inverted}};
+    if (measured) j["measured"] = measured_json(*measured);
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
     fmt::print(stderr, "simplify (schroeder): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", thousands(r.faces_in),
                thousands(r.faces_out), thousands(r.vertices_in), thousands(r.vertices_out), r.seconds);
     fmt::print(stderr, "  largest removal error {:.6g} ({:.4f}% of the diagonal){}\n", r.error, r.error * pct,
                d.accumulate_error ? ", accumulated" : "");
-    if (measured)
-      fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%), {} faces facing against the input\n",
-                 measured->hausdorff, measured->percent(measured->hausdorff), measured->rms,
-                 measured->percent(measured->rms), inverted);
+    if (measured) print_measured(*measured);
     fmt::print(stderr, "  {}\n", r.reason_text);
   }
   return 0;
@@ -169,9 +185,8 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   const SimplifyResult r = simplify(mesh, s);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
 
-  std::optional<Comparison> measured;
-  Index inverted = 0;  // measured: faces facing against the nearest input face
-  if (o.measure) measured = compare(mesh, r.mesh), inverted = count_flipped_faces(mesh, r.mesh);
+  std::optional<Measured> measured;
+  if (o.measure) measured = measure(mesh, r.mesh);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
   const std::optional<std::string> hint = stop_hint(r, o, mesh);
   if (o.json) {
@@ -186,11 +201,13 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     if (r.reason != StopReason::TargetReached) j["blocked"] = blocked_json(r.blocked);
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
     if (hint) j["hint"] = *hint;
-    if (measured)
-      j["measured"] = {{"hausdorff", measured->hausdorff}, {"hausdorff_percent", measured->percent(measured->hausdorff)},
-                       {"rms", measured->rms}, {"rms_percent", measured->percent(measured->rms)},
-                       {"mean", measured->mean}, {"inverted_faces", inverted}, {"normal_deviation_mean_deg",
-                        0.5 * (measured->a_to_b.normal_deviation_mean_deg + measured->b_to_a.normal_deviation_mean_deg)}};
+    if (measured) {
+      const Comparison& c = measured->distances;
+      j["measured"] = measured_json(*measured);
+      j["measured"]["mean"] = c.mean;
+      j["measured"]["normal_deviation_mean_deg"] =
+          0.5 * (c.a_to_b.normal_deviation_mean_deg + c.b_to_a.normal_deviation_mean_deg);
+    }
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
     fmt::print(stderr, "simplify ({}): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", o.method,
@@ -198,10 +215,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                r.seconds);
     fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
     if (r.lanes > 1) fmt::print(stderr, "  {} slabs simplified side by side, then one queue for the rest\n", r.lanes);
-    if (measured)
-      fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%), {} faces facing against the input\n",
-                 measured->hausdorff, measured->percent(measured->hausdorff), measured->rms,
-                 measured->percent(measured->rms), inverted);
+    if (measured) print_measured(*measured);
     fmt::print(stderr, "  {}\n", r.reason_text);
     if (hint) fmt::print(stderr, "  hint: {}\n", *hint);
   }
