@@ -1,6 +1,11 @@
 #include "metrics/aabb_tree.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <numbers>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <limits>
 
 #include "core/geometry.h"
@@ -9,51 +14,78 @@ namespace lodkit::detail {
 
 namespace {
 constexpr int kLeafSize = 4;
+constexpr int kParallelFaces = 1 << 14;  // subtrees larger than this are built side by side
+
+// facing_against() skips the search where every face near p turns less than kTurn from a cone that
+// itself lies within a right angle, less kTurn, of the normal asked about: the nearest face, whichever
+// it is, then faces the same way. A larger kTurn finds faces that turn farther off, but asks more of
+// the normal; clearances are searched out to kReach times a leaf's size.
+constexpr double kTurn = std::numbers::pi / 4;
+constexpr double kReach = 8;
+constexpr double kAngleSlack = 1e-7;   // radians: acos and the sums of angles round
+constexpr double kCosineSlack = 1e-9;  // and cosines
+
+double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {  // unit vectors
+  return std::acos(std::clamp(a.dot(b), -1.0, 1.0));
+}
 
 double box_squared_distance(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& p) {
   return (p - p.cwiseMax(box.min()).cwiseMin(box.max())).squaredNorm();
 }
 }  // namespace
 
+// Nodes of a subtree over n faces and over n + 1: the tree splits at the median, so this depends on
+// n alone. (Halves differ by one at most, so two counts per level carry the recursion.)
+std::pair<int, int> subtree_nodes_pair(int n) {
+  if (n + 1 <= kLeafSize) return {1, 1};
+  if (n == kLeafSize) return {1, 3};
+  const auto [a, b] = subtree_nodes_pair(n / 2);
+  return n % 2 == 0 ? std::pair{1 + 2 * a, 1 + a + b} : std::pair{1 + a + b, 1 + 2 * b};
+}
+int subtree_nodes(int n) { return subtree_nodes_pair(n).first; }
+
 AabbTree::AabbTree(const Mesh& mesh) : mesh_(mesh) {
   const Index n = mesh.num_faces();
   order_.resize(static_cast<std::size_t>(n));
   std::vector<Eigen::Vector3d> centroids(static_cast<std::size_t>(n));
-  for (Index f = 0; f < n; ++f) {
+  tbb::parallel_for(Index{0}, n, [&](Index f) {
     order_[f] = f;
     centroids[f] = (mesh.positions.row(mesh.triangles(f, 0)) + mesh.positions.row(mesh.triangles(f, 1)) +
                     mesh.positions.row(mesh.triangles(f, 2))).transpose() / 3.0;
-  }
-  nodes_.reserve(static_cast<std::size_t>(2 * n / kLeafSize + 2));
-  nodes_.push_back({});
-  if (n > 0) build(0, 0, static_cast<int>(n), centroids);
+  });
+  nodes_.resize(n > 0 ? static_cast<std::size_t>(subtree_nodes(static_cast<int>(n))) : 1);
+  if (n > 0) build(0, 1, 0, static_cast<int>(n), centroids);
 }
 
-void AabbTree::build(int node, int begin, int end, const std::vector<Eigen::Vector3d>& centroids) {
-  Eigen::AlignedBox3d box, centre_box;
-  for (int i = begin; i < end; ++i) {
-    const Index f = order_[i];
-    for (int k = 0; k < 3; ++k) box.extend(mesh_.positions.row(mesh_.triangles(f, k)).transpose());
-    centre_box.extend(centroids[f]);
-  }
-  nodes_[node].box = box;
+void AabbTree::build(int node, int free, int begin, int end, const std::vector<Eigen::Vector3d>& centroids) {
+  Node& out = nodes_[node];
   if (end - begin <= kLeafSize) {
-    nodes_[node].first = begin;
-    nodes_[node].count = end - begin;
+    for (int i = begin; i < end; ++i)
+      for (int k = 0; k < 3; ++k) out.box.extend(mesh_.positions.row(mesh_.triangles(order_[i], k)).transpose());
+    out.first = begin;
+    out.count = end - begin;
     return;
   }
+  Eigen::AlignedBox3d centre_box;
+  for (int i = begin; i < end; ++i) centre_box.extend(centroids[order_[i]]);
   int axis;
   centre_box.diagonal().maxCoeff(&axis);
   const int mid = (begin + end) / 2;
   std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
                    [&](Index a, Index b) { return centroids[a][axis] < centroids[b][axis]; });
-  const int left = static_cast<int>(nodes_.size());
-  nodes_.push_back({});
-  nodes_.push_back({});
-  nodes_[node].first = left;
-  nodes_[node].count = 0;
-  build(left, begin, mid, centroids);
-  build(left + 1, mid, end, centroids);
+  // The children are a pair at `free`; then the left subtree's other nodes, then the right's: each
+  // subtree owns a block of indices, so the halves can be built side by side.
+  const int left = free, right = free + 1;
+  const int left_free = free + 2, right_free = left_free + subtree_nodes(mid - begin) - 1;
+  out.first = left;
+  out.count = 0;
+  auto build_left = [&] { build(left, left_free, begin, mid, centroids); };
+  auto build_right = [&] { build(right, right_free, mid, end, centroids); };
+  if (end - begin > kParallelFaces)
+    tbb::parallel_invoke(build_left, build_right);
+  else
+    build_left(), build_right();
+  out.box = nodes_[left].box.merged(nodes_[right].box);
 }
 
 AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
@@ -89,6 +121,139 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
     }
   }
   return best;
+}
+
+void AabbTree::prepare_facing() {
+  const Index n = mesh_.num_faces();
+  normals_.assign(static_cast<std::size_t>(n), Eigen::Vector3d::Zero());
+  for (Index f = 0; f < n; ++f) {
+    const Eigen::Vector3d a = mesh_.positions.row(mesh_.triangles(f, 0)), b = mesh_.positions.row(mesh_.triangles(f, 1)),
+                          c = mesh_.positions.row(mesh_.triangles(f, 2));
+    const Eigen::Vector3d normal = (b - a).cross(c - a);
+    if (const double length = normal.norm(); length > 0) normals_[f] = normal / length;
+  }
+  leaf_of_.assign(static_cast<std::size_t>(n), -1);
+  cones_.assign(nodes_.size(), Cone{Eigen::Vector3d::Zero(), -1});
+  clearance_.assign(nodes_.size(), -1.0f);
+  if (order_.empty()) return;
+  // Children come after their parent: bottom up is back to front.
+  for (int i = static_cast<int>(nodes_.size()) - 1; i >= 0; --i) {
+    const Node& node = nodes_[i];
+    Cone& cone = cones_[i];
+    if (node.count > 0) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int s = node.first; s < node.first + node.count; ++s) {
+        leaf_of_[order_[s]] = i;
+        sum += normals_[order_[s]];
+      }
+      for (int s = node.first; s < node.first + node.count; ++s) {
+        const Eigen::Vector3d& normal = normals_[order_[s]];
+        if (normal == Eigen::Vector3d::Zero()) continue;
+        if (sum.norm() < 1e-6) {  // faces back to back: any direction
+          cone = {normal, std::numbers::pi};
+          break;
+        }
+        if (cone.half_angle < 0) cone = {sum.normalized(), 0.0};
+        cone.half_angle = std::max(cone.half_angle, angle_between(cone.axis, normal) + kAngleSlack);
+      }
+      continue;
+    }
+    const Cone &a = cones_[node.first], &b = cones_[node.first + 1];
+    if (a.half_angle < 0 || b.half_angle < 0) {
+      cone = a.half_angle < 0 ? b : a;
+      continue;
+    }
+    const Eigen::Vector3d sum = a.axis + b.axis;
+    cone.axis = sum.norm() > 1e-6 ? Eigen::Vector3d(sum.normalized()) : a.axis;
+    cone.half_angle = std::min(std::numbers::pi, std::max(angle_between(cone.axis, a.axis) + a.half_angle,
+                                                          angle_between(cone.axis, b.axis) + b.half_angle) + kAngleSlack);
+  }
+  for (Cone& cone : cones_) {
+    cone.cos_half = std::cos(cone.half_angle);
+    cone.sin_half = std::sin(cone.half_angle);
+    // angle(axis, n) < pi/2 - (half angle + kTurn), as axis . n > sin(half angle + kTurn); never
+    // where that angle is no right angle short.
+    const double turn = cone.half_angle + kTurn;
+    cone.min_facing_dot = cone.half_angle >= 0 && turn < std::numbers::pi / 2 ? std::sin(turn) + kCosineSlack : 2.0;
+  }
+}
+
+double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vector3d& axis, double angle,
+                                    double limit) const {
+  // In cosines, with a margin: a face near the limit counts as turned, and a node is passed over only
+  // when none of its faces can be.
+  const double cos_angle = std::cos(angle), sin_angle = std::sin(angle);
+  double best = limit * limit;
+  int stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const int i = stack[--top];
+    const Node& node = nodes_[i];
+    const Cone& cone = cones_[i];
+    if (box_squared_distance(node.box, p) >= best) continue;
+    if (cone.half_angle < 0) continue;  // no face with area
+    // angle(axis, cone axis) + half angle <= angle, as cos(angle - half angle) <= axis . cone axis
+    if (cone.half_angle <= angle &&
+        axis.dot(cone.axis) >= cos_angle * cone.cos_half + sin_angle * cone.sin_half + kCosineSlack)
+      continue;
+    if (node.count > 0) {
+      for (int s = node.first; s < node.first + node.count; ++s) {
+        const Index f = order_[s];
+        if (normals_[f] == Eigen::Vector3d::Zero() || axis.dot(normals_[f]) >= cos_angle + kCosineSlack) continue;
+        const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
+                                                            mesh_.positions.row(mesh_.triangles(f, 1)),
+                                                            mesh_.positions.row(mesh_.triangles(f, 2)));
+        best = std::min(best, (q - p).squaredNorm());
+      }
+      continue;
+    }
+    const int a = node.first, b = node.first + 1;
+    const bool a_nearer = box_squared_distance(nodes_[a].box, p) < box_squared_distance(nodes_[b].box, p);
+    stack[top++] = a_nearer ? b : a;
+    stack[top++] = a_nearer ? a : b;
+  }
+  return std::sqrt(best);
+}
+
+double AabbTree::clearance(int leaf) const {
+  std::atomic_ref<float> stored(clearance_[leaf]);
+  if (const float known = stored.load(std::memory_order_relaxed); known >= 0) return known;
+  const Cone& cone = cones_[leaf];
+  const double angle = cone.half_angle + kTurn;
+  double found = 0;
+  if (cone.half_angle >= 0 && angle < std::numbers::pi) {
+    const Eigen::AlignedBox3d& box = nodes_[leaf].box;
+    found = distance_to_turned(box.center(), cone.axis, angle, kReach * 0.5 * box.diagonal().norm());
+  }
+  // Rounded down into a float: a clearance may only ever be too small. Two threads that fill in
+  // the same leaf store the same value.
+  float rounded = static_cast<float>(found);
+  if (rounded > found) rounded = std::nextafter(rounded, 0.0f);
+  stored.store(rounded, std::memory_order_relaxed);
+  return rounded;
+}
+
+bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const {
+  const double length = normal.norm();
+  if (!(length > 0)) return false;
+  if (hint >= 0) {
+    // Every face nearer p than the hint is nearer the leaf's centre than |p - centre| + d(p, hint);
+    // inside the clearance, each turns at most cone + kTurn from the axis, so less than a right
+    // angle from `normal`.
+    const int leaf = leaf_of_[hint];
+    const Cone& cone = cones_[leaf];
+    if (cone.axis.dot(normal) > cone.min_facing_dot * length) {
+      const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(hint, 0)),
+                                                          mesh_.positions.row(mesh_.triangles(hint, 1)),
+                                                          mesh_.positions.row(mesh_.triangles(hint, 2)));
+      const double reach = (p - nodes_[leaf].box.center()).norm() + (q - p).norm();
+      if (reach * (1 + 1e-9) < clearance(leaf)) return false;
+    }
+  }
+  const Hit hit = closest(p, hint);
+  hint = hit.face;
+  return hit.face >= 0 && normals_[hit.face].dot(normal) < 0;
 }
 
 }  // namespace lodkit::detail

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <numbers>
+#include <numeric>
 #include <optional>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -89,7 +90,12 @@ class Engine {
     set_total_turn(starting_total_turn_deg());
     max_valence_ = o_.max_valence.value_or(default_max_valence(o_.method));
     if (cost_->costly()) scored_.resize(s_.position.size());
-    if (o_.no_inverted_faces && o_.preserve_topology) input_tree_ = std::make_unique<AabbTree>(mesh);
+    if (o_.no_inverted_faces && o_.preserve_topology) {
+      input_tree_ = std::make_unique<AabbTree>(mesh);
+      input_tree_->prepare_facing();
+      nearest_input_.resize(static_cast<std::size_t>(mesh.num_faces()));
+      std::iota(nearest_input_.begin(), nearest_input_.end(), Index{0});
+    }
   }
 
   SimplifyResult run(Index target);
@@ -116,20 +122,23 @@ class Engine {
   Index wedge_at(Index f, Index p) const;
   Rejection geometry(Index u, Index v, const Eigen::Vector3d& p);
   /// Whether face f, with corners `corners` and normal n, faces against the input face nearest its
-  /// centroid (as count_flipped_faces() sees it), where in the input it did not. Face f is input face f:
-  /// the search starts there. (Double-sided input, two faces back to back, has faces that face against
-  /// their twin from the start; holding them would hold their whole neighbourhood.)
+  /// centroid (as count_flipped_faces() sees it), where in the input it did not. The search starts at
+  /// the input face found nearest f last time (at first f itself: face f is input face f).
+  /// (Double-sided input, two faces back to back, has faces that face against their twin from the
+  /// start; holding them would hold their whole neighbourhood.)
   bool faces_against_input(Index f, const Eigen::Vector3d* corners, const Eigen::Vector3d& n) const {
-    auto against = [&](const Eigen::Vector3d& centroid, const Eigen::Vector3d& normal) {
-      const AabbTree::Hit hit = input_tree_->closest(centroid, f);
-      return hit.face >= 0 && normal.dot(s_.face_normal0[hit.face].cast<double>()) < 0;
-    };
-    if (!against((corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin, n)) return false;
+    // Lanes query side by side, each on faces of its own region; the hint is only ever a hint.
+    std::atomic_ref<Index> last_nearest(nearest_input_[f]);
+    Index hint = last_nearest.load(std::memory_order_relaxed);
+    const bool now = input_tree_->facing_against((corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin, n, hint);
+    last_nearest.store(hint, std::memory_order_relaxed);
+    if (!now) return false;
     const Mesh& in = *s_.input;
     const Eigen::Vector3d input_centroid =
         (in.positions.row(in.triangles(f, 0)) + in.positions.row(in.triangles(f, 1)) + in.positions.row(in.triangles(f, 2)))
             .transpose() / 3.0;
-    return !against(input_centroid, s_.face_normal0[f].cast<double>());
+    Index self = f;
+    return !input_tree_->facing_against(input_centroid, s_.face_normal0[f].cast<double>(), self);
   }
   /// The checks and the cost of u -> v, into lane.probe (the path that collapses). With `scored`, c
   /// already holds the cost of u -> v in the current state (recall()) and is not computed again.
@@ -214,6 +223,7 @@ class Engine {
   SimplifyOptions o_;
   EngineState s_;
   std::unique_ptr<AabbTree> input_tree_;  // with no_inverted_faces: the input, for the face nearest a new face
+  mutable std::vector<Index> nearest_input_;  // with no_inverted_faces: per face, the input face last found nearest
   std::unique_ptr<CostModel> cost_;
   Lane main_;  // the whole run's, or the last part's after the lanes
   std::vector<std::uint32_t> version_;
@@ -596,7 +606,9 @@ Rejection Engine::structure(Index u, Index v, Freedom& freedom, Lane* link, Prob
 Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
   if (!o_.preserve_topology) return Rejection::None;
   constexpr double kQualityScale = 6.928203230275509;  // 4 sqrt(3): equilateral = 1
-  auto check = [&](Index moved, Index other) {
+  // Two passes: the local checks on every changed face first, so that a candidate they reject never
+  // pays for the nearest-input-face queries of the second.
+  auto check = [&](Index moved, Index other, bool against_input) {
     for (Index f : s_.faces_of(moved)) {
       Eigen::Vector3d before[3], after[3];
       bool has_other = false;
@@ -607,15 +619,18 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
         if (q == moved) after[k] = p;
       }
       if (has_other) continue;  // vanishes
-      const Eigen::Vector3d n0 = (before[1] - before[0]).cross(before[2] - before[0]);
       const Eigen::Vector3d n1 = (after[1] - after[0]).cross(after[2] - after[0]);
+      if (against_input) {
+        if (faces_against_input(f, after, n1)) return Rejection::Inverted;
+        continue;
+      }
+      const Eigen::Vector3d n0 = (before[1] - before[0]).cross(before[2] - before[0]);
       const double l0 = n0.norm(), l1 = n1.norm();
       if (!(l1 > 0)) return Rejection::Sliver;
       // Against the face's last shape, and against its input shape (by a limit of its own): small turns
       // must not add up to a flip over many collapses.
       if (l0 > 0 && n1.dot(n0) < cos_max_turn_ * l0 * l1) return Rejection::Flip;
       if (n1.dot(s_.face_normal0[f].cast<double>()) < cos_max_total_turn_ * l1) return Rejection::Flip;
-      if (input_tree_ && faces_against_input(f, after, n1)) return Rejection::Inverted;
       auto quality = [&](const Eigen::Vector3d* t, double twice_area) {
         const double sum = (t[1] - t[0]).squaredNorm() + (t[2] - t[1]).squaredNorm() + (t[0] - t[2]).squaredNorm();
         return sum > 0 ? kQualityScale * 0.5 * twice_area / sum : 0.0;
@@ -625,8 +640,13 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
     }
     return Rejection::None;
   };
-  if (const Rejection r = check(u, v); r != Rejection::None) return r;
-  if (p != s_.position[v]) return check(v, u);
+  const bool v_moves = p != s_.position[v];
+  for (const bool against_input : {false, true}) {
+    if (against_input && !input_tree_) break;
+    if (const Rejection r = check(u, v, against_input); r != Rejection::None) return r;
+    if (v_moves)
+      if (const Rejection r = check(v, u, against_input); r != Rejection::None) return r;
+  }
   return Rejection::None;
 }
 

@@ -1,0 +1,126 @@
+// The closest-point tree against brute force: closest() and facing_against() must give the answers a
+// scan over every face gives, whatever the hint, where facing_against() skips its search or not.
+#include <gtest/gtest.h>
+#include <lodkit/primitives.h>
+
+#include <random>
+
+#include "core/geometry.h"
+#include "metrics/aabb_tree.h"
+#include "test_util.h"
+
+namespace lodkit {
+namespace {
+
+using detail::AabbTree;
+
+Eigen::Vector3d corner(const Mesh& m, Index f, int k) { return m.positions.row(m.triangles(f, k)); }
+
+// The lowest-numbered face at the least distance, and that distance squared.
+std::pair<Index, double> brute_closest(const Mesh& m, const Eigen::Vector3d& p) {
+  std::pair<Index, double> best{-1, std::numeric_limits<double>::infinity()};
+  for (Index f = 0; f < m.num_faces(); ++f) {
+    const double d = (detail::closest_point_on_triangle(p, corner(m, f, 0), corner(m, f, 1), corner(m, f, 2)) - p).squaredNorm();
+    if (d < best.second) best = {f, d};
+  }
+  return best;
+}
+
+bool brute_facing_against(const Mesh& m, const Eigen::Vector3d& p, const Eigen::Vector3d& normal) {
+  const Index f = brute_closest(m, p).first;
+  const Eigen::Vector3d n = (corner(m, f, 1) - corner(m, f, 0)).cross(corner(m, f, 2) - corner(m, f, 0));
+  return n.norm() > 0 && n.normalized().dot(normal) < 0;
+}
+
+// Points near the surface (a face's random point, pushed off it a little), each with the face it came
+// from, and normals from that face's own to well past a right angle from it.
+struct Probe {
+  Eigen::Vector3d point, normal;
+  Index source;
+};
+std::vector<Probe> probes_near(const Mesh& m, int count, double offset, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0, 1), turn(-2.0, 2.0);
+  std::uniform_int_distribution<Index> face(0, m.num_faces() - 1);
+  std::vector<Probe> probes;
+  for (int i = 0; i < count; ++i) {
+    const Index f = face(rng);
+    double a = unit(rng), b = unit(rng);
+    if (a + b > 1) a = 1 - a, b = 1 - b;
+    const Eigen::Vector3d p0 = corner(m, f, 0), e1 = corner(m, f, 1) - p0, e2 = corner(m, f, 2) - p0;
+    const Eigen::Vector3d n = e1.cross(e2).normalized();
+    const Eigen::Vector3d t = e1.normalized(), s = n.cross(t);
+    const Eigen::Vector3d point = p0 + a * e1 + b * e2 + (unit(rng) - 0.5) * offset * n;
+    // A turn of up to ~115 degrees about a random direction in the face's plane.
+    const double angle = turn(rng), spin = 6.283185307179586 * unit(rng);
+    const Eigen::Vector3d axis = std::cos(spin) * t + std::sin(spin) * s;
+    probes.push_back({point, Eigen::AngleAxisd(angle, axis) * n, f});
+  }
+  return probes;
+}
+
+TEST(AabbTree, ClosestMatchesBruteForceWhateverTheHint) {
+  const Mesh torus = make_torus({});
+  const AabbTree tree(torus);
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<Index> face(0, torus.num_faces() - 1);
+  for (const Probe& probe : probes_near(torus, 400, 0.5, 11)) {
+    const auto [face_expected, d_expected] = brute_closest(torus, probe.point);
+    for (const Index hint : {Index{-1}, probe.source, face(rng)}) {
+      const AabbTree::Hit hit = tree.closest(probe.point, hint);
+      EXPECT_EQ(hit.face, face_expected);
+      EXPECT_EQ(hit.squared_distance, d_expected);
+    }
+  }
+}
+
+// A thin lens has two sheets a hundredth apart, facing opposite ways: near the rim and between the
+// sheets, the nearest face may lie on the far sheet, where a skip on the near sheet's cone would be
+// wrong. Every answer must be the brute-force one.
+TEST(AabbTree, FacingAgainstMatchesBruteForceOnTwoCloseSheets) {
+  const Mesh lens = test::thin_lens();
+  AabbTree tree(lens);
+  tree.prepare_facing();
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<Index> face(0, lens.num_faces() - 1);
+  int against = 0, total = 0;
+  for (const double offset : {0.0, 0.004, 0.03}) {
+    for (const Probe& probe : probes_near(lens, 1500, offset, 17 + static_cast<unsigned>(offset * 1000))) {
+      const bool expected = brute_facing_against(lens, probe.point, probe.normal);
+      for (Index hint : {Index{-1}, probe.source, face(rng)}) {
+        ASSERT_EQ(tree.facing_against(probe.point, probe.normal, hint), expected)
+            << "point " << probe.point.transpose() << " normal " << probe.normal.transpose();
+        ASSERT_GE(hint, 0);
+        // Asked again from the hint it left: the same answer.
+        ASSERT_EQ(tree.facing_against(probe.point, probe.normal, hint), expected);
+      }
+      against += expected;
+      ++total;
+    }
+  }
+  // Both answers occur, so neither a constant nor a skip that always says "no" passes.
+  EXPECT_GT(against, total / 20);
+  EXPECT_LT(against, total - total / 20);
+}
+
+TEST(AabbTree, FacingAgainstHandlesFacesWithoutAreaAndFacesBackToBack) {
+  // A square twice, once each way (back to back), and a face of no area beside them.
+  Mesh m;
+  m.positions.resize(7, 3);
+  m.positions << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 2, 0, 0, 3, 0, 0, 4, 0, 0;
+  m.triangles.resize(5, 3);
+  m.triangles << 0, 1, 2, 0, 2, 3, 0, 2, 1, 0, 3, 2, 4, 5, 6;
+  AabbTree tree(m);
+  tree.prepare_facing();
+  const Eigen::Vector3d up(0, 0, 1);
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.3, 0.6, 0.1), Eigen::Vector3d(0.7, 0.2, -0.2),
+                                   Eigen::Vector3d(3.0, 0.0, 0.5), Eigen::Vector3d(3.0, 0.1, 0.0)})
+    for (const Eigen::Vector3d& n : {up, Eigen::Vector3d(-up), Eigen::Vector3d(0.3, 0.2, 0.9)})
+      for (Index hint = -1; hint < m.num_faces(); ++hint) {
+        Index h = hint;
+        EXPECT_EQ(tree.facing_against(p, n, h), brute_facing_against(m, p, n)) << p.transpose() << " / " << n.transpose();
+      }
+}
+
+}  // namespace
+}  // namespace lodkit
