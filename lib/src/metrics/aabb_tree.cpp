@@ -21,7 +21,7 @@ constexpr int kParallelFaces = 1 << 14;  // subtrees larger than this are built 
 // it is, then faces the same way. A larger kTurn finds faces that turn farther off, but asks more of
 // the normal; clearances are searched out to kReach times a leaf's size.
 constexpr double kTurn = std::numbers::pi / 4;
-constexpr double kReach = 8;
+constexpr double kReach = 6;
 constexpr double kAngleSlack = 1e-7;   // radians: acos and the sums of angles round
 constexpr double kCosineSlack = 1e-9;  // and cosines
 
@@ -126,38 +126,43 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
 void AabbTree::prepare_facing() {
   const Index n = mesh_.num_faces();
   normals_.assign(static_cast<std::size_t>(n), Eigen::Vector3d::Zero());
-  for (Index f = 0; f < n; ++f) {
+  tbb::parallel_for(Index{0}, n, [&](Index f) {
     const Eigen::Vector3d a = mesh_.positions.row(mesh_.triangles(f, 0)), b = mesh_.positions.row(mesh_.triangles(f, 1)),
                           c = mesh_.positions.row(mesh_.triangles(f, 2));
     const Eigen::Vector3d normal = (b - a).cross(c - a);
     if (const double length = normal.norm(); length > 0) normals_[f] = normal / length;
-  }
-  leaf_of_.assign(static_cast<std::size_t>(n), -1);
+  });
   cones_.assign(nodes_.size(), Cone{Eigen::Vector3d::Zero(), -1});
-  clearance_.assign(nodes_.size(), -1.0f);
+  facing_.assign(static_cast<std::size_t>(n), Facing{});
   if (order_.empty()) return;
-  // Children come after their parent: bottom up is back to front.
-  for (int i = static_cast<int>(nodes_.size()) - 1; i >= 0; --i) {
+  const int nodes = static_cast<int>(nodes_.size());
+  auto set_trig = [](Cone& cone) {
+    cone.cos_half = std::cos(cone.half_angle);
+    cone.sin_half = std::sin(cone.half_angle);
+  };
+  tbb::parallel_for(0, nodes, [&](int i) {
     const Node& node = nodes_[i];
+    if (node.count == 0) return;
     Cone& cone = cones_[i];
-    if (node.count > 0) {
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (int s = node.first; s < node.first + node.count; ++s) {
-        leaf_of_[order_[s]] = i;
-        sum += normals_[order_[s]];
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int s = node.first; s < node.first + node.count; ++s) sum += normals_[order_[s]];
+    for (int s = node.first; s < node.first + node.count; ++s) {
+      const Eigen::Vector3d& normal = normals_[order_[s]];
+      if (normal == Eigen::Vector3d::Zero()) continue;
+      if (sum.norm() < 1e-6) {  // faces back to back: any direction
+        cone = {normal, std::numbers::pi};
+        break;
       }
-      for (int s = node.first; s < node.first + node.count; ++s) {
-        const Eigen::Vector3d& normal = normals_[order_[s]];
-        if (normal == Eigen::Vector3d::Zero()) continue;
-        if (sum.norm() < 1e-6) {  // faces back to back: any direction
-          cone = {normal, std::numbers::pi};
-          break;
-        }
-        if (cone.half_angle < 0) cone = {sum.normalized(), 0.0};
-        cone.half_angle = std::max(cone.half_angle, angle_between(cone.axis, normal) + kAngleSlack);
-      }
-      continue;
+      if (cone.half_angle < 0) cone = {sum.normalized(), 0.0};
+      cone.half_angle = std::max(cone.half_angle, angle_between(cone.axis, normal) + kAngleSlack);
     }
+    set_trig(cone);
+  });
+  // Children come after their parent: bottom up is back to front.
+  for (int i = nodes - 1; i >= 0; --i) {
+    const Node& node = nodes_[i];
+    if (node.count > 0) continue;
+    Cone& cone = cones_[i];
     const Cone &a = cones_[node.first], &b = cones_[node.first + 1];
     if (a.half_angle < 0 || b.half_angle < 0) {
       cone = a.half_angle < 0 ? b : a;
@@ -167,15 +172,39 @@ void AabbTree::prepare_facing() {
     cone.axis = sum.norm() > 1e-6 ? Eigen::Vector3d(sum.normalized()) : a.axis;
     cone.half_angle = std::min(std::numbers::pi, std::max(angle_between(cone.axis, a.axis) + a.half_angle,
                                                           angle_between(cone.axis, b.axis) + b.half_angle) + kAngleSlack);
+    set_trig(cone);
   }
-  for (Cone& cone : cones_) {
-    cone.cos_half = std::cos(cone.half_angle);
-    cone.sin_half = std::sin(cone.half_angle);
-    // angle(axis, n) < pi/2 - (half angle + kTurn), as axis . n > sin(half angle + kTurn); never
-    // where that angle is no right angle short.
-    const double turn = cone.half_angle + kTurn;
-    cone.min_facing_dot = cone.half_angle >= 0 && turn < std::numbers::pi / 2 ? std::sin(turn) + kCosineSlack : 2.0;
+  tbb::parallel_for(0, nodes, [&](int i) {
+    if (nodes_[i].count > 0) set_facing(i);
+  });
+}
+
+void AabbTree::set_facing(int leaf) {
+  const Node& node = nodes_[leaf];
+  const Cone& cone = cones_[leaf];
+  // The angle from the (float) axis that a normal must keep under, less a right angle, to skip.
+  const double turn = cone.half_angle + kTurn + 1e-6;
+  if (cone.half_angle < 0 || turn >= std::numbers::pi / 2) return;  // no skipping here
+  Facing facing;
+  for (int k = 0; k < 3; ++k) facing.axis[k] = static_cast<float>(cone.axis[k]);
+  facing.min_dot = std::nextafter(static_cast<float>(std::sin(turn) + kCosineSlack), 2.0f);
+  // The anchor: the centroid of the leaf's first face with area, in floats, so a little off the face;
+  // the clearance is measured from it, less that little.
+  for (int s = node.first; s < node.first + node.count; ++s) {
+    const Index f = order_[s];
+    if (normals_[f] == Eigen::Vector3d::Zero()) continue;
+    const Eigen::Vector3d a = mesh_.positions.row(mesh_.triangles(f, 0)), b = mesh_.positions.row(mesh_.triangles(f, 1)),
+                          c = mesh_.positions.row(mesh_.triangles(f, 2));
+    facing.anchor = ((a + b + c) / 3.0).cast<float>();
+    const Eigen::Vector3d anchor = facing.anchor.cast<double>();
+    const double off_surface = (closest_point_on_triangle(anchor, a, b, c) - anchor).norm();
+    const double reach = kReach * 0.5 * node.box.diagonal().norm();
+    const double clearance = distance_to_turned(anchor, cone.axis, cone.half_angle + kTurn, reach) - off_surface;
+    facing.clearance = static_cast<float>(clearance);
+    if (facing.clearance > clearance) facing.clearance = std::nextafter(facing.clearance, -1.0f);
+    break;
   }
+  for (int s = node.first; s < node.first + node.count; ++s) facing_[order_[s]] = facing;
 }
 
 double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vector3d& axis, double angle,
@@ -216,40 +245,17 @@ double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vecto
   return std::sqrt(best);
 }
 
-double AabbTree::clearance(int leaf) const {
-  std::atomic_ref<float> stored(clearance_[leaf]);
-  if (const float known = stored.load(std::memory_order_relaxed); known >= 0) return known;
-  const Cone& cone = cones_[leaf];
-  const double angle = cone.half_angle + kTurn;
-  double found = 0;
-  if (cone.half_angle >= 0 && angle < std::numbers::pi) {
-    const Eigen::AlignedBox3d& box = nodes_[leaf].box;
-    found = distance_to_turned(box.center(), cone.axis, angle, kReach * 0.5 * box.diagonal().norm());
-  }
-  // Rounded down into a float: a clearance may only ever be too small. Two threads that fill in
-  // the same leaf store the same value.
-  float rounded = static_cast<float>(found);
-  if (rounded > found) rounded = std::nextafter(rounded, 0.0f);
-  stored.store(rounded, std::memory_order_relaxed);
-  return rounded;
-}
-
 bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const {
   const double length = normal.norm();
   if (!(length > 0)) return false;
   if (hint >= 0) {
-    // Every face nearer p than the hint is nearer the leaf's centre than |p - centre| + d(p, hint);
-    // inside the clearance, each turns at most cone + kTurn from the axis, so less than a right
-    // angle from `normal`.
-    const int leaf = leaf_of_[hint];
-    const Cone& cone = cones_[leaf];
-    if (cone.axis.dot(normal) > cone.min_facing_dot * length) {
-      const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(hint, 0)),
-                                                          mesh_.positions.row(mesh_.triangles(hint, 1)),
-                                                          mesh_.positions.row(mesh_.triangles(hint, 2)));
-      const double reach = (p - nodes_[leaf].box.center()).norm() + (q - p).norm();
-      if (reach * (1 + 1e-9) < clearance(leaf)) return false;
-    }
+    // Let a be the hint leaf's anchor, e its distance off the surface, g the face nearest p. Then
+    // |p - g| <= |p - a| + e, and g comes within 2 |p - a| + e of a: inside the clearance, g turns
+    // less than cone + kTurn from the axis, so less than a right angle from `normal`.
+    const Facing& facing = facing_[hint];
+    if (facing.axis.cast<double>().dot(normal) > facing.min_dot * length &&
+        2 * (p - facing.anchor.cast<double>()).norm() < facing.clearance * (1 - 1e-9))
+      return false;
   }
   const Hit hit = closest(p, hint);
   hint = hit.face;

@@ -37,23 +37,30 @@ class AabbTree {
     Eigen::Vector3d axis;
     double half_angle;  // radians, never too small; < 0: the node has no face with area
     double cos_half = 1, sin_half = 0;  // set once every cone is known
-    double min_facing_dot = 2;  // facing_against() may skip its search for a normal n with axis . n above this
+  };
+  // Per face, its leaf's certificate for facing_against(): a normal n with axis . n > min_dot |n|,
+  // asked about at a point p with 2 |p - anchor| < clearance, needs no search. 32 bytes, read by face
+  // number: the caller's hint is usually the face it is looking at.
+  struct Facing {
+    Eigen::Vector3f axis = Eigen::Vector3f::Zero();
+    float min_dot = 2;  // never
+    Eigen::Vector3f anchor = Eigen::Vector3f::Zero();
+    float clearance = 0;  // from the anchor, less its distance off the surface; 0: never
   };
   /// Fills in `node` over slots [begin, end); its descendants take indices from `free` on.
   void build(int node, int free, int begin, int end, const std::vector<Eigen::Vector3d>& centroids);
   /// Distance from p to the nearest face whose normal is more than `angle` from unit `axis`, or
   /// `limit` if there is none nearer.
   double distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vector3d& axis, double angle, double limit) const;
-  /// For leaf node `leaf`: how far from its box's centre every face keeps within kTurn of its cone.
-  double clearance(int leaf) const;
+  /// The certificate of every face in leaf node `leaf`.
+  void set_facing(int leaf);
   const Mesh& mesh_;
   std::vector<Node> nodes_;
   std::vector<Index> order_;
   // prepare_facing():
   std::vector<Eigen::Vector3d> normals_;  // per face, unit (zero: no area)
   std::vector<Cone> cones_;              // per node
-  std::vector<int> leaf_of_;             // per face
-  mutable std::vector<float> clearance_;  // per node, filled in on first use (-1: not yet)
+  std::vector<Facing> facing_;           // per face
 };
 
 }  // namespace lodkit::detail

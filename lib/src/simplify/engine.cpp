@@ -12,6 +12,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include "core/geometry.h"
 #include "core/topology.h"
@@ -79,6 +80,15 @@ class Engine {
  public:
   Engine(const Mesh& mesh, const SimplifyOptions& options) : o_(options) {
     s_.input = &mesh;
+    // The input's tree has no part in the setup: it is built alongside.
+    tbb::task_group input_tree_task;
+    if (o_.no_inverted_faces && o_.preserve_topology)
+      input_tree_task.run([&] {
+        input_tree_ = std::make_unique<AabbTree>(mesh);
+        input_tree_->prepare_facing();
+        nearest_input_.resize(static_cast<std::size_t>(mesh.num_faces()));
+        std::iota(nearest_input_.begin(), nearest_input_.end(), Index{0});
+      });
     setup(mesh);
     setup_attributes(mesh);
     switch (o_.method) {
@@ -90,12 +100,7 @@ class Engine {
     set_total_turn(starting_total_turn_deg());
     max_valence_ = o_.max_valence.value_or(default_max_valence(o_.method));
     if (cost_->costly()) scored_.resize(s_.position.size());
-    if (o_.no_inverted_faces && o_.preserve_topology) {
-      input_tree_ = std::make_unique<AabbTree>(mesh);
-      input_tree_->prepare_facing();
-      nearest_input_.resize(static_cast<std::size_t>(mesh.num_faces()));
-      std::iota(nearest_input_.begin(), nearest_input_.end(), Index{0});
-    }
+    input_tree_task.wait();
   }
 
   SimplifyResult run(Index target);
