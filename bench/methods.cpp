@@ -42,14 +42,23 @@ PeerRun run_method(const std::string& method, const Mesh& mesh, Index target) {
     DecimateResult r = decimate(mesh, {.target_faces = target});
     return {std::move(r.mesh), seconds_since(t0)};
   }
-  // "quadric-no-inverted": the method with SimplifyOptions::no_inverted_faces.
-  constexpr std::string_view kNoInverted = "-no-inverted";
-  const bool no_inverted = method.ends_with(kNoInverted);
-  const auto parsed = parse_method(no_inverted ? method.substr(0, method.size() - kNoInverted.size()) : method);
+  // "quadric-inverted-avoid": the method with SimplifyOptions::inverted_faces = Avoid (and "-allow",
+  // "-refuse"; "-no-inverted" is "-inverted-refuse").
+  std::string name = method;
+  std::optional<InvertedFaces> inverted;
+  if (name.ends_with("-no-inverted")) {
+    name.resize(name.size() - std::string_view("-no-inverted").size());
+    inverted = InvertedFaces::Refuse;
+  } else if (const auto at = name.rfind("-inverted-"); at != std::string::npos) {
+    inverted = parse_inverted_faces(name.substr(at + std::string_view("-inverted-").size()));
+    if (!inverted) throw Error("unknown method " + method);
+    name.resize(at);
+  }
+  const auto parsed = parse_method(name);
   if (!parsed) throw Error("unknown method " + method);
   SimplifyOptions o;
   o.method = *parsed;
-  o.no_inverted_faces = no_inverted;
+  o.inverted_faces = inverted;
   o.target_faces = target;
   SimplifyResult r = simplify(mesh, o);
   return {std::move(r.mesh), seconds_since(t0)};

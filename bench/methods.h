@@ -13,7 +13,8 @@ const std::vector<std::string>& all_methods();
 
 /// Simplifies `mesh` to `target` faces with `method`; the time is the simplification call only
 /// (for `pm`: building the progressive mesh plus extracting the level). lodkit's edge-collapse methods
-/// also take the suffix "-no-inverted" (SimplifyOptions::no_inverted_faces, not among all_methods()).
+/// also take the suffixes "-inverted-allow|avoid|refuse" (SimplifyOptions::inverted_faces; not among
+/// all_methods()), and "-no-inverted" for "-inverted-refuse".
 /// Throws on an unknown name.
 PeerRun run_method(const std::string& method, const Mesh& mesh, Index target);
 

@@ -229,9 +229,10 @@ TEST(CliSimplify, FlatShadedInputNamesAndTakesRecomputeNormals) {
   EXPECT_TRUE(inspect(out).closed);
 }
 
-TEST(CliSimplify, NoInvertedFacesIsAnOptionAndMeasureCountsThem) {
+TEST(CliSimplify, InvertedFacesAreAnOptionAndMeasureCountsThem) {
   // A lens 1/100 as thick as wide: --measure counts the faces facing against the input, which
-  // --no-inverted-faces leaves none of; held to 8 faces, it stops short and names itself.
+  // --inverted-faces avoid and refuse leave none of at 3 %. Held to 8 faces, refuse stops short and
+  // its hint names avoid, which goes further and says from where it let such faces be.
   test::ScratchDir dir("cli-simplify-inverted");
   write_mesh(test::thin_lens(), (dir / "lens.ply").string());
   auto measured = [&](const std::string& extra) {
@@ -240,11 +241,23 @@ TEST(CliSimplify, NoInvertedFacesIsAnOptionAndMeasureCountsThem) {
     return nlohmann::json::parse(r.out);
   };
   EXPECT_GT(measured("--ratio 0.03")["measured"]["inverted_faces"].get<int>(), 0);
+  EXPECT_GT(measured("--ratio 0.03 --inverted-faces allow")["measured"]["inverted_faces"].get<int>(), 0);
+  EXPECT_EQ(measured("--ratio 0.03 --inverted-faces avoid")["measured"]["inverted_faces"].get<int>(), 0);
+  EXPECT_EQ(measured("--ratio 0.03 --inverted-faces refuse")["measured"]["inverted_faces"].get<int>(), 0);
   EXPECT_EQ(measured("--ratio 0.03 --no-inverted-faces")["measured"]["inverted_faces"].get<int>(), 0);
-  const auto stuck = measured("--faces 8 --no-inverted-faces");
+  const auto stuck = measured("--faces 8 --inverted-faces refuse");
   EXPECT_GT(stuck["faces_out"].get<int>(), 8);
   EXPECT_GT(stuck["blocked"]["inverted"].get<int>(), 0);
-  EXPECT_NE(stuck["hint"].get<std::string>().find("--no-inverted-faces"), std::string::npos) << stuck.dump();
+  EXPECT_FALSE(stuck.contains("inverted_allowed_at_faces"));
+  EXPECT_NE(stuck["hint"].get<std::string>().find("--inverted-faces avoid"), std::string::npos) << stuck.dump();
+  const auto avoided = measured("--faces 8 --inverted-faces avoid");
+  EXPECT_LT(avoided["faces_out"].get<int>(), stuck["faces_out"].get<int>());
+  EXPECT_EQ(avoided["inverted_allowed_at_faces"].get<int>(), stuck["faces_out"].get<int>()) << avoided.dump();
+  EXPECT_NE(avoided["reason_text"].get<std::string>().find("let face against the input"), std::string::npos);
+  // A mode that is not one is refused before anything is read, as is naming both options.
+  EXPECT_NE(run(dir, "simplify lens.ply -o t.ply --inverted-faces never").status, 0);
+  EXPECT_NE(run(dir, "simplify lens.ply -o t.ply --inverted-faces avoid --no-inverted-faces").status, 0);
+  EXPECT_FALSE(std::filesystem::exists(dir / "t.ply"));
 }
 
 TEST(CliSimplify, TheTotalTurnLimitIsAnOptionToo) {

@@ -738,38 +738,56 @@ TEST(Simplify, HoppeSamplesSharpEdgesSoThatNoCollapseBevelsThem) {
   }
 }
 
-TEST(Simplify, NoInvertedFacesLeavesNoneOnAThinLens) {
+TEST(Simplify, AvoidingOrRefusingInvertedFacesLeavesNoneOnAThinLens) {
   const Mesh lens = test::thin_lens();
   SimplifyOptions o;
   o.target_ratio = 0.03;
   const SimplifyResult plain = simplify(lens, o);
   ASSERT_GT(count_flipped_faces(lens, plain.mesh), 0) << "the lens no longer shows the failure this test guards";
-  o.no_inverted_faces = true;
-  for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe}) {
-    SCOPED_TRACE(static_cast<int>(method));
-    o.method = method;
-    const SimplifyResult r = simplify(lens, o);
-    EXPECT_EQ(r.reason, StopReason::TargetReached) << r.reason_text;
-    EXPECT_EQ(count_flipped_faces(lens, r.mesh), 0);
-    const MeshReport after = inspect(r.mesh);
-    EXPECT_TRUE(after.manifold);
-    EXPECT_EQ(after.euler_characteristic, 2);
-  }
+  for (const InvertedFaces mode : {InvertedFaces::Avoid, InvertedFaces::Refuse})
+    for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe}) {
+      SCOPED_TRACE(to_string(method) + " " + to_string(mode));
+      o.method = method;
+      o.inverted_faces = mode;
+      const SimplifyResult r = simplify(lens, o);
+      EXPECT_EQ(r.reason, StopReason::TargetReached) << r.reason_text;
+      EXPECT_FALSE(r.inverted_allowed_at);
+      EXPECT_EQ(count_flipped_faces(lens, r.mesh), 0);
+      const MeshReport after = inspect(r.mesh);
+      EXPECT_TRUE(after.manifold);
+      EXPECT_EQ(after.euler_characteristic, 2);
+    }
 }
 
-TEST(Simplify, NoInvertedFacesSaysWhenItStopsShort) {
-  // Down to a tetrahedron, a lens this thin must fold a face across: the run stops short and counts the
-  // edges that rule held back.
+TEST(Simplify, RefusingInvertedFacesSaysWhenItStopsShortAndAvoidingGoesOn) {
+  // Down to a tetrahedron, a lens this thin must fold a face across: refusing, the run stops short and
+  // counts the edges that rule held back; avoiding, it goes on from there and says so.
   const Mesh lens = test::thin_lens();
   SimplifyOptions o;
   o.target_faces = 8;
-  o.no_inverted_faces = true;
+  o.inverted_faces = InvertedFaces::Refuse;
   const SimplifyResult r = simplify(lens, o);
   EXPECT_EQ(r.reason, StopReason::NoLegalCollapse);
   EXPECT_GT(r.faces_out, 8);
   EXPECT_GT(r.blocked.inverted, 0);
   EXPECT_NE(r.reason_text.find("face against the input"), std::string::npos) << r.reason_text;
   EXPECT_EQ(count_flipped_faces(lens, r.mesh), 0);
+  EXPECT_FALSE(r.inverted_allowed_at);
+
+  o.inverted_faces = InvertedFaces::Avoid;
+  const SimplifyResult avoided = simplify(lens, o);
+  ASSERT_TRUE(avoided.inverted_allowed_at);
+  EXPECT_EQ(*avoided.inverted_allowed_at, r.faces_out);  // the same run up to there
+  EXPECT_LT(avoided.faces_out, r.faces_out);
+  EXPECT_EQ(avoided.blocked.inverted, 0);
+  EXPECT_NE(avoided.reason_text.find("let face against the input"), std::string::npos) << avoided.reason_text;
+  EXPECT_TRUE(inspect(avoided.mesh).manifold);
+}
+
+TEST(Simplify, InvertedFacesModesHaveNames) {
+  for (const InvertedFaces mode : {InvertedFaces::Allow, InvertedFaces::Avoid, InvertedFaces::Refuse})
+    EXPECT_EQ(parse_inverted_faces(to_string(mode)), mode);
+  EXPECT_FALSE(parse_inverted_faces("never"));
 }
 
 TEST(Simplify, IsDeterministic) {

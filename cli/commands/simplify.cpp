@@ -23,6 +23,7 @@ struct SimplifyCliOptions {
   std::optional<std::string> max_error;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
   bool measure = false, json = false, recompute_normals = false, no_inverted_faces = false;
+  std::optional<std::string> inverted_faces;  // allow|avoid|refuse; unset: by method
   double max_normal_change = SimplifyOptions{}.max_normal_change_deg, crease_weight = SimplifyOptions{}.crease_weight;
   std::vector<double> attribute_weights;
   double feature_angle = 30.0, aspect_ratio = 0.1;
@@ -64,8 +65,8 @@ std::optional<std::string> stop_hint(const SimplifyResult& r, const SimplifyCliO
                         "lets faces turn further, which often takes CAD parts closer to the target",
                         hint.empty() ? "" : "; ", r.blocked.flips, r.blocked.remaining, o.max_normal_change);
   if (r.blocked.inverted > 0)
-    hint += fmt::format("{}{} of the {} edges left would leave a face facing against the input; without "
-                        "--no-inverted-faces the run goes on, and may leave some",
+    hint += fmt::format("{}{} of the {} edges left would leave a face facing against the input; with "
+                        "--inverted-faces avoid the run goes on where only those are left, and may leave some",
                         hint.empty() ? "" : "; ", r.blocked.inverted, r.blocked.remaining);
   if (hint.empty()) return std::nullopt;
   return hint + " (docs/commands/simplify.md)";
@@ -79,7 +80,7 @@ nlohmann::json blocked_json(const BlockedEdges& b) {
 }
 
 // --measure, for every method: lodkit compare's distances, and the faces facing against the input face
-// nearest their centroid (what SimplifyOptions::no_inverted_faces rules out).
+// nearest their centroid (what SimplifyOptions::inverted_faces avoids or refuses).
 struct Measured {
   Comparison distances;
   Index inverted_faces = 0;
@@ -165,7 +166,8 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     s.attribute_weights = {o.attribute_weights[0], o.attribute_weights[1], o.attribute_weights[2]};
   }
   s.recompute_normals = o.recompute_normals;
-  s.no_inverted_faces = o.no_inverted_faces;
+  if (o.inverted_faces) s.inverted_faces = parse_inverted_faces(*o.inverted_faces);
+  if (o.no_inverted_faces) s.inverted_faces = InvertedFaces::Refuse;
   s.seed = o.seed;
   s.hoppe_points_per_face = o.hoppe_samples;
   s.hoppe_points_on_every_face = o.hoppe_every_face;
@@ -200,6 +202,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                      {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}, {"lanes", r.lanes}};
     if (r.reason != StopReason::TargetReached) j["blocked"] = blocked_json(r.blocked);
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
+    if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
     if (hint) j["hint"] = *hint;
     if (measured) {
       const Comparison& c = measured->distances;
@@ -289,9 +292,13 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
-  sub->add_flag("--no-inverted-faces", opt->no_inverted_faces,
-                "Refuse collapses that leave a face facing against the nearest input face, so the output has none "
-                "(about 3x slower on scans; may stop short of the target, and says so)");
+  sub->add_option("--inverted-faces", opt->inverted_faces,
+                  "Collapses that leave a face facing against the nearest input face: allow (no check), avoid (refuse "
+                  "them while others remain), refuse (never; may stop short of the target, and says so). Default: "
+                  "allow")
+      ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
+  sub->add_flag("--no-inverted-faces", opt->no_inverted_faces, "The same as --inverted-faces refuse")
+      ->excludes("--inverted-faces");
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).

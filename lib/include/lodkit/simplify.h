@@ -34,6 +34,16 @@ namespace lodkit {
 
 enum class SimplifyMethod { Quadric, Hoppe, EdgeLength };
 
+/// What a run does about faces that would face against the input face nearest their centroid (what
+/// count_flipped_faces() counts, and benchmarks call flipped). The flip checks hold a face to its own
+/// input shape only; a coarse face can still come to lie nearer another part of the input (the far
+/// side of a thin part, a crossing component) and face against it.
+enum class InvertedFaces {
+  Allow,   ///< no check beyond the flip checks
+  Avoid,   ///< refuse such collapses while others remain; allow them where only they are left
+  Refuse,  ///< refuse every such collapse, and stop short of the target if need be
+};
+
 /// Weights of attribute errors against geometric error (quadric method). An attribute difference of
 /// 1 (a UV unit, a colour channel's range, a unit normal's component) weighs like `weight` times the
 /// bounding-box diagonal. 0 leaves that attribute out of the cost (seams are kept either way).
@@ -74,12 +84,10 @@ struct SimplifyOptions {
   /// run short of its target (SimplifyResult::turn_limit_relaxed_at).
   std::optional<double> max_total_normal_change_deg{};
   double min_triangle_quality = 0.02;   ///< 4 sqrt(3) area / sum of squared edges, for new triangles
-  /// Refuse every collapse that would leave a face facing against the input face nearest its centroid
-  /// (what count_flipped_faces() counts), so the output has none: thin parts whose two sides a coarse
-  /// face could otherwise cross, and dense scans, come out with zero. Costs a closest-face query per
-  /// face a collapse changes (about 3x the time on a scan), and may stop a run short of its target,
-  /// saying so (BlockedEdges::inverted). With preserve_topology only; schroeder does not use it.
-  bool no_inverted_faces = false;
+  /// Faces facing against the input face nearest their centroid: checked with a closest-face query per
+  /// face a collapse changes, skipped where a certificate shows the answer (AabbTree::facing_against()).
+  /// Unset: by method (default_inverted_faces()). With preserve_topology only; schroeder does not use it.
+  std::optional<InvertedFaces> inverted_faces{};
   /// Attribute-aware quadrics (Garland & Heckbert 1998) for the attributes given a weight; the merged
   /// wedges then also take the attribute values that minimise the error.
   AttributeWeights attribute_weights{};
@@ -161,7 +169,7 @@ struct BlockedEdges {
   Index boundary = 0;     ///< a boundary point would leave its boundary
   Index seams = 0;        ///< an attribute seam would break
   Index flips = 0;        ///< a face would turn by more than max_normal_change_deg
-  Index inverted = 0;     ///< a face would face against the nearest input face (no_inverted_faces)
+  Index inverted = 0;     ///< a face would face against the nearest input face (inverted_faces)
   Index slivers = 0;      ///< a new face would be degenerate or a sliver
   Index valence = 0;      ///< a vertex would get more faces than max_valence
   Index error_limit = 0;  ///< the collapse's error exceeds max_error
@@ -186,6 +194,9 @@ struct SimplifyResult {
   /// Faces left when the run, stuck above its target under the method's default limit on a face's turn
   /// from its input shape, went on with 90 degrees (see max_total_normal_change_deg); unset if it did not.
   std::optional<Index> turn_limit_relaxed_at;
+  /// Faces left when the run, stuck above its target with InvertedFaces::Avoid, went on allowing faces
+  /// that face against the input; unset if it did not.
+  std::optional<Index> inverted_allowed_at;
   double seconds = 0.0;
   std::vector<Index> vertex_origin; ///< for each output vertex, its input vertex
   std::vector<Index> face_origin;   ///< for each output face, the input face it is (moved corners and all)
@@ -220,7 +231,13 @@ Index default_max_valence(SimplifyMethod method);
 /// short of its target.
 double default_max_total_normal_change(SimplifyMethod method);
 
+/// InvertedFaces when SimplifyOptions::inverted_faces is unset: Allow for every method (see
+/// docs/commands/simplify.md, "Faces facing against the input", for what Avoid and Refuse cost).
+InvertedFaces default_inverted_faces(SimplifyMethod method);
+
 std::string to_string(SimplifyMethod method);
+std::string to_string(InvertedFaces mode);
+std::optional<InvertedFaces> parse_inverted_faces(const std::string& name);
 std::optional<SimplifyMethod> parse_method(const std::string& name);
 
 }  // namespace lodkit

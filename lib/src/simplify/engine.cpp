@@ -82,7 +82,9 @@ class Engine {
     s_.input = &mesh;
     // The input's tree has no part in the setup: it is built alongside.
     tbb::task_group input_tree_task;
-    if (o_.no_inverted_faces && o_.preserve_topology)
+    inverted_mode_ = o_.inverted_faces.value_or(default_inverted_faces(o_.method));
+    refuse_inverted_ = inverted_mode_ != InvertedFaces::Allow && o_.preserve_topology;
+    if (refuse_inverted_)
       input_tree_task.run([&] {
         input_tree_ = std::make_unique<AabbTree>(mesh);
         input_tree_->prepare_facing();
@@ -227,8 +229,14 @@ class Engine {
 
   SimplifyOptions o_;
   EngineState s_;
-  std::unique_ptr<AabbTree> input_tree_;  // with no_inverted_faces: the input, for the face nearest a new face
-  mutable std::vector<Index> nearest_input_;  // with no_inverted_faces: per face, the input face last found nearest
+  InvertedFaces inverted_mode_;
+  bool refuse_inverted_;                  // faces facing against the input are refused (now)
+  std::unique_ptr<AabbTree> input_tree_;  // the input, for the face nearest a new face (unless Allow)
+  mutable std::vector<Index> nearest_input_;  // per face, the input face last found nearest (unless Allow)
+  /// Faces left when InvertedFaces::Avoid gave way (relax_inverted()).
+  std::optional<Index> inverted_allowed_at_;
+  /// With InvertedFaces::Avoid, once nothing else is left: allow faces facing against the input.
+  bool relax_inverted();
   std::unique_ptr<CostModel> cost_;
   Lane main_;  // the whole run's, or the last part's after the lanes
   std::vector<std::uint32_t> version_;
@@ -647,7 +655,7 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p) {
   };
   const bool v_moves = p != s_.position[v];
   for (const bool against_input : {false, true}) {
-    if (against_input && !input_tree_) break;
+    if (against_input && !refuse_inverted_) break;
     if (const Rejection r = check(u, v, against_input); r != Rejection::None) return r;
     if (v_moves)
       if (const Rejection r = check(v, u, against_input); r != Rejection::None) return r;
@@ -871,7 +879,7 @@ std::string Engine::stop_report(Index target, BlockedEdges& blocked) {
   blocked.error_limit = count(Rejection::ErrorLimit), blocked.cost = count(Rejection::Cost);
   const char* names[] = {"", "locked (non-manifold or locked boundary) vertices", "topology (link condition)",
                          "boundary rules", "attribute seams", "the valence limit", "face flips",
-                         "faces that would face against the input (no_inverted_faces)", "slivers",
+                         "faces that would face against the input (inverted_faces)", "slivers",
                          "the error limit", "the cost"};
   std::string why;
   for (int r = 1; r < static_cast<int>(Rejection::kCount); ++r)
@@ -1061,6 +1069,13 @@ bool Engine::relax_total_turn() {
   return true;
 }
 
+bool Engine::relax_inverted() {
+  if (inverted_mode_ != InvertedFaces::Avoid || !refuse_inverted_) return false;
+  refuse_inverted_ = false;
+  inverted_allowed_at_ = s_.alive_faces;
+  return true;
+}
+
 std::vector<std::pair<Index, Index>> Engine::remaining_edges() {
   std::vector<std::pair<Index, Index>> edges;
   std::vector<Index>& ring = main_.ring;
@@ -1117,14 +1132,15 @@ SimplifyResult Engine::run(Index target) {
   // longer turns too far) was never queued again, and the run stopped short of a legal collapse. Rate
   // every edge left once more, and go on while that finds collapses.
   // When that finds none, a default limit on the turn from the input shape may still give way (the turn is
-  // checked at the top of the queue, not in rating: an empty rating leaves nothing for it to free).
+  // checked at the top of the queue, not in rating: an empty rating leaves nothing for it to free), and
+  // then InvertedFaces::Avoid.
   while (!deferred && s_.alive_faces > target) {
     std::vector<HeapEntry> entries = rate_all(remaining_edges());
     if (entries.empty()) break;
     const Index before = main_.collapses;
     main_.queue.load(std::move(entries));
     drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
-    if (main_.collapses == before && !relax_total_turn()) break;
+    if (main_.collapses == before && !relax_total_turn() && !relax_inverted()) break;
   }
   Candidate c;
   if (s_.alive_faces > target && deferred) {
@@ -1150,6 +1166,12 @@ SimplifyResult Engine::run(Index target) {
     result.reason_text += fmt::format("; faces were let turn up to {:g} degrees from their input shape from {} faces on, "
                                       "where the default limit of {:g} held every collapse back",
                                       total_turn_deg_, *relaxed_at_, starting_total_turn_deg());
+  }
+  if (inverted_allowed_at_) {
+    result.inverted_allowed_at = *inverted_allowed_at_;
+    result.reason_text += fmt::format("; faces were let face against the input from {} faces on, where avoiding "
+                                      "that held every collapse back",
+                                      *inverted_allowed_at_);
   }
 
   // Output: surviving faces in input order; surviving wedges in input order with their point's position.
@@ -1277,6 +1299,8 @@ Index default_lane_faces(SimplifyMethod method) { return method == SimplifyMetho
 
 Index default_max_valence(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 24 : 0; }
 
+InvertedFaces default_inverted_faces(SimplifyMethod) { return InvertedFaces::Allow; }
+
 double default_max_total_normal_change(SimplifyMethod method) { return method == SimplifyMethod::Quadric ? 90.0 : 60.0; }
 
 std::string to_string(SimplifyMethod method) {
@@ -1292,6 +1316,21 @@ std::optional<SimplifyMethod> parse_method(const std::string& name) {
   if (name == "quadric") return SimplifyMethod::Quadric;
   if (name == "hoppe") return SimplifyMethod::Hoppe;
   if (name == "edge-length") return SimplifyMethod::EdgeLength;
+  return std::nullopt;
+}
+
+std::string to_string(InvertedFaces mode) {
+  switch (mode) {
+    case InvertedFaces::Allow: return "allow";
+    case InvertedFaces::Avoid: return "avoid";
+    case InvertedFaces::Refuse: return "refuse";
+  }
+  return "?";
+}
+
+std::optional<InvertedFaces> parse_inverted_faces(const std::string& name) {
+  for (const InvertedFaces mode : {InvertedFaces::Allow, InvertedFaces::Avoid, InvertedFaces::Refuse})
+    if (name == to_string(mode)) return mode;
   return std::nullopt;
 }
 
