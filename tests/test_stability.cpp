@@ -12,38 +12,46 @@
 namespace lodkit {
 namespace {
 
+// The default method, as it is and avoiding or refusing faces that face against the input.
 TEST(Stability, DefaultMethodStaysValidOnTheSuite) {
+  const std::optional<InvertedFaces> modes[] = {std::nullopt, InvertedFaces::Avoid, InvertedFaces::Refuse};
   for (const test::StabilityCase& c : test::stability_suite()) {
-    SCOPED_TRACE(c.name);
     const MeshReport before = inspect(c.mesh);
-    for (double ratio : {0.1, 0.01, 0.0}) {
-      SCOPED_TRACE(ratio);
-      SimplifyOptions o;
-      o.target_ratio = ratio;
-      const SimplifyResult r = simplify(c.mesh, o);
-      ASSERT_TRUE(r.mesh.positions.allFinite());
-      validate(r.mesh);
-      const MeshReport after = inspect(r.mesh);
-      EXPECT_LE(after.non_manifold_edges, before.non_manifold_edges);
-      EXPECT_EQ(after.euler_characteristic, before.euler_characteristic);
-      EXPECT_EQ(after.components, before.components);
-      EXPECT_EQ(after.boundary_loops, before.boundary_loops);
-      if (before.genus) {
-        ASSERT_TRUE(after.genus);
-        EXPECT_EQ(*after.genus, *before.genus);
-      }
-      // Faces against the nearest input face, while the output still follows the input; at the
-      // extremes (a torus of nine vertices) "nearest" loses its meaning: then a closed mesh must at
-      // least stay outward.
-      if (ratio >= 0.1) {
-        EXPECT_EQ(count_flipped_faces(c.mesh, r.mesh), 0);
-      }
-      if (before.volume && after.volume) {
-        EXPECT_GT(*after.volume * *before.volume, 0.0);
-      }
-      EXPECT_LT(r.faces_out, c.mesh.num_faces());
-      if (r.reason != StopReason::TargetReached) {
-        EXPECT_FALSE(r.reason_text.empty());
+    for (const std::optional<InvertedFaces> inverted : modes) {
+      for (double ratio : {0.1, 0.01, 0.0}) {
+        SCOPED_TRACE(c.name + " inverted faces: " + (inverted ? to_string(*inverted) : "default") +
+                     " ratio: " + std::to_string(ratio));
+        SimplifyOptions o;
+        o.target_ratio = ratio;
+        o.inverted_faces = inverted;
+        const SimplifyResult r = simplify(c.mesh, o);
+        ASSERT_TRUE(r.mesh.positions.allFinite());
+        validate(r.mesh);
+        const MeshReport after = inspect(r.mesh);
+        EXPECT_LE(after.non_manifold_edges, before.non_manifold_edges);
+        EXPECT_EQ(after.euler_characteristic, before.euler_characteristic);
+        EXPECT_EQ(after.components, before.components);
+        EXPECT_EQ(after.boundary_loops, before.boundary_loops);
+        if (before.genus) {
+          ASSERT_TRUE(after.genus);
+          EXPECT_EQ(*after.genus, *before.genus);
+        }
+        // Faces against the nearest input face, while the output still follows the input; at the
+        // extremes (a torus of nine vertices) "nearest" loses its meaning: then a closed mesh must at
+        // least stay outward. Refused, there are none at any ratio.
+        if (ratio >= 0.1 || inverted == InvertedFaces::Refuse) {
+          EXPECT_EQ(count_flipped_faces(c.mesh, r.mesh), 0);
+        }
+        if (inverted == InvertedFaces::Refuse) {
+          EXPECT_FALSE(r.inverted_allowed_at);
+        }
+        if (before.volume && after.volume) {
+          EXPECT_GT(*after.volume * *before.volume, 0.0);
+        }
+        EXPECT_LT(r.faces_out, c.mesh.num_faces());
+        if (r.reason != StopReason::TargetReached) {
+          EXPECT_FALSE(r.reason_text.empty());
+        }
       }
     }
   }
