@@ -103,22 +103,23 @@ TEST(AabbTree, FacingAgainstMatchesBruteForceOnTwoCloseSheets) {
   EXPECT_LT(against, total - total / 20);
 }
 
-TEST(AabbTree, FacingAgainstHandlesFacesWithoutAreaAndFacesBackToBack) {
+TEST(AabbTree, FacingAgainstHandlesFacesWithoutAreaAndFacesBackToBackPreparedOrNot) {
   // A square twice, once each way (back to back), and a face of no area beside them.
   Mesh m;
   m.positions.resize(7, 3);
   m.positions << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 2, 0, 0, 3, 0, 0, 4, 0, 0;
   m.triangles.resize(5, 3);
   m.triangles << 0, 1, 2, 0, 2, 3, 0, 2, 1, 0, 3, 2, 4, 5, 6;
-  AabbTree tree(m);
+  AabbTree tree(m), unprepared(m);
   tree.prepare_facing();
   const Eigen::Vector3d up(0, 0, 1);
   for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.3, 0.6, 0.1), Eigen::Vector3d(0.7, 0.2, -0.2),
                                    Eigen::Vector3d(3.0, 0.0, 0.5), Eigen::Vector3d(3.0, 0.1, 0.0)})
     for (const Eigen::Vector3d& n : {up, Eigen::Vector3d(-up), Eigen::Vector3d(0.3, 0.2, 0.9)})
       for (Index hint = -1; hint < m.num_faces(); ++hint) {
-        Index h = hint;
+        Index h = hint, h2 = hint;
         EXPECT_EQ(tree.facing_against(p, n, h), brute_facing_against(m, p, n)) << p.transpose() << " / " << n.transpose();
+        EXPECT_EQ(unprepared.facing_against(p, n, h2), brute_facing_against(m, p, n)) << "without prepare_facing()";
       }
 }
 

@@ -1,12 +1,11 @@
 #include "metrics/aabb_tree.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
-#include <limits>
 
 #include "core/geometry.h"
 
@@ -32,7 +31,6 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {  // u
 double box_squared_distance(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& p) {
   return (p - p.cwiseMax(box.min()).cwiseMin(box.max())).squaredNorm();
 }
-}  // namespace
 
 // Nodes of a subtree over n faces and over n + 1: the tree splits at the median, so this depends on
 // n alone. (Halves differ by one at most, so two counts per level carry the recursion.)
@@ -43,6 +41,7 @@ std::pair<int, int> subtree_nodes_pair(int n) {
   return n % 2 == 0 ? std::pair{1 + 2 * a, 1 + a + b} : std::pair{1 + a + b, 1 + 2 * b};
 }
 int subtree_nodes(int n) { return subtree_nodes_pair(n).first; }
+}  // namespace
 
 AabbTree::AabbTree(const Mesh& mesh) : mesh_(mesh) {
   const Index n = mesh.num_faces();
@@ -182,12 +181,15 @@ void AabbTree::prepare_facing() {
 void AabbTree::set_facing(int leaf) {
   const Node& node = nodes_[leaf];
   const Cone& cone = cones_[leaf];
-  // The angle from the (float) axis that a normal must keep under, less a right angle, to skip.
-  const double turn = cone.half_angle + kTurn + 1e-6;
+  // A normal n may skip when angle(axis, n) < pi/2 - turn, that is axis . n > sin(turn) |n|. The
+  // stored axis is the cone's rounded to floats, off by up to about 1e-7 in any dot product with a
+  // unit vector: the margin on the sine covers that (a margin on the angle would not, where the
+  // sine is flat).
+  const double turn = cone.half_angle + kTurn;
   if (cone.half_angle < 0 || turn >= std::numbers::pi / 2) return;  // no skipping here
   Facing facing;
-  for (int k = 0; k < 3; ++k) facing.axis[k] = static_cast<float>(cone.axis[k]);
-  facing.min_dot = std::nextafter(static_cast<float>(std::sin(turn) + kCosineSlack), 2.0f);
+  facing.axis = cone.axis.cast<float>();
+  facing.min_dot = std::nextafter(static_cast<float>(std::sin(turn) + 1e-6), 2.0f);
   // The anchor: the centroid of the leaf's first face with area, in floats, so a little off the face;
   // the clearance is measured from it, less that little.
   for (int s = node.first; s < node.first + node.count; ++s) {
@@ -248,7 +250,7 @@ double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vecto
 bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const {
   const double length = normal.norm();
   if (!(length > 0)) return false;
-  if (hint >= 0) {
+  if (hint >= 0 && !facing_.empty()) {
     // Let a be the hint leaf's anchor, e its distance off the surface, g the face nearest p. Then
     // |p - g| <= |p - a| + e, and g comes within 2 |p - a| + e of a: inside the clearance, g turns
     // less than cone + kTurn from the axis, so less than a right angle from `normal`.
@@ -259,7 +261,14 @@ bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& n
   }
   const Hit hit = closest(p, hint);
   hint = hit.face;
-  return hit.face >= 0 && normals_[hit.face].dot(normal) < 0;
+  if (hit.face < 0) return false;
+  if (normals_.empty()) {  // not prepared: the face's own normal
+    const Eigen::Vector3d a = mesh_.positions.row(mesh_.triangles(hit.face, 0)),
+                          b = mesh_.positions.row(mesh_.triangles(hit.face, 1)),
+                          c = mesh_.positions.row(mesh_.triangles(hit.face, 2));
+    return (b - a).cross(c - a).dot(normal) < 0;
+  }
+  return normals_[hit.face].dot(normal) < 0;
 }
 
 }  // namespace lodkit::detail

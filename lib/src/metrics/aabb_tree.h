@@ -24,8 +24,8 @@ class AabbTree {
   /// Whether `normal` faces against (negative dot with) the normal of the face closest(p) finds; a
   /// face without area faces neither way. `hint`: a face near p, or -1; on return, a face near p to
   /// start from next time. Where the faces around the hint all lie within a narrow cone of normals
-  /// far enough out from p, the answer follows without a search (see the .cpp). Needs prepare_facing();
-  /// safe to call from several threads.
+  /// far enough out from p, the answer follows without a search (see the .cpp); without
+  /// prepare_facing(), every call searches. Safe to call from several threads.
   bool facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const;
 
  private:
