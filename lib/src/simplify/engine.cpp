@@ -90,6 +90,7 @@ class Engine {
         input_tree_->prepare_facing();
         nearest_input_.resize(static_cast<std::size_t>(mesh.num_faces()));
         std::iota(nearest_input_.begin(), nearest_input_.end(), Index{0});
+        against_in_input_.assign(static_cast<std::size_t>(mesh.num_faces()), kUnknown);
       });
     setup(mesh);
     setup_attributes(mesh);
@@ -140,12 +141,17 @@ class Engine {
     const bool now = input_tree_->facing_against((corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin, n, hint);
     last_nearest.store(hint, std::memory_order_relaxed);
     if (!now) return false;
+    // Whether input face f already faced against its nearest input face: found once per face.
+    std::atomic_ref<std::int8_t> known(against_in_input_[f]);
+    if (const std::int8_t k = known.load(std::memory_order_relaxed); k != kUnknown) return k == 0;
     const Mesh& in = *s_.input;
     const Eigen::Vector3d input_centroid =
         (in.positions.row(in.triangles(f, 0)) + in.positions.row(in.triangles(f, 1)) + in.positions.row(in.triangles(f, 2)))
             .transpose() / 3.0;
     Index self = f;
-    return !input_tree_->facing_against(input_centroid, s_.face_normal0[f].cast<double>(), self);
+    const bool already = input_tree_->facing_against(input_centroid, s_.face_normal0[f].cast<double>(), self);
+    known.store(already ? 1 : 0, std::memory_order_relaxed);
+    return !already;
   }
   /// The checks and the cost of u -> v, into lane.probe (the path that collapses). With `scored`, c
   /// already holds the cost of u -> v in the current state (recall()) and is not computed again.
@@ -233,6 +239,8 @@ class Engine {
   bool refuse_inverted_;                  // faces facing against the input are refused (now)
   std::unique_ptr<AabbTree> input_tree_;  // the input, for the face nearest a new face (unless Allow)
   mutable std::vector<Index> nearest_input_;  // per face, the input face last found nearest (unless Allow)
+  static constexpr std::int8_t kUnknown = -1;
+  mutable std::vector<std::int8_t> against_in_input_;  // per face: 1 if its input self faced against the input
   /// Faces left when InvertedFaces::Avoid gave way (relax_inverted()).
   std::optional<Index> inverted_allowed_at_;
   /// With InvertedFaces::Avoid, once nothing else is left: allow faces facing against the input.
