@@ -294,7 +294,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
   sub->add_option("--inverted-faces", opt->inverted_faces,
                   "Collapses that leave a face facing against the nearest input face: allow (no check), avoid (refuse "
-                  "them while others remain), refuse (never; may stop short of the target, and says so). Default: "
+                  "them while others remain, then allow a few at a time), refuse (never; may stop short of the target, and says so). Default: "
                   "allow")
       ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
   sub->add_flag("--no-inverted-faces", opt->no_inverted_faces, "The same as --inverted-faces refuse")

@@ -1080,7 +1080,7 @@ bool Engine::relax_total_turn() {
 bool Engine::relax_inverted() {
   if (inverted_mode_ != InvertedFaces::Avoid || !refuse_inverted_) return false;
   refuse_inverted_ = false;
-  inverted_allowed_at_ = s_.alive_faces;
+  if (!inverted_allowed_at_) inverted_allowed_at_ = s_.alive_faces;
   return true;
 }
 
@@ -1141,13 +1141,23 @@ SimplifyResult Engine::run(Index target) {
   // every edge left once more, and go on while that finds collapses.
   // When that finds none, a default limit on the turn from the input shape may still give way (the turn is
   // checked at the top of the queue, not in rating: an empty rating leaves nothing for it to free), and
-  // then InvertedFaces::Avoid.
+  // then InvertedFaces::Avoid, for a few collapses at a time.
+  // InvertedFaces::Avoid gives way a few collapses at a time (a tenth of what is left to remove),
+  // then holds again: faces that face against the input are let be only where they are needed.
   while (!deferred && s_.alive_faces > target) {
     std::vector<HeapEntry> entries = rate_all(remaining_edges());
     if (entries.empty()) break;
     const Index before = main_.collapses;
     main_.queue.load(std::move(entries));
-    drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
+    const bool giving_way = inverted_mode_ == InvertedFaces::Avoid && !refuse_inverted_;
+    const Index allowance = std::max<Index>(1, (s_.alive_faces - target) / 20);
+    drain(main_, [&] { return s_.alive_faces <= target || (giving_way && main_.collapses - before >= allowance); },
+          deferred);
+    if (giving_way) {
+      if (main_.collapses == before) break;     // nothing even so: it was not the rule that held
+      if (!deferred) refuse_inverted_ = true;  // (a deferred last collapse is taken as it was found)
+      continue;
+    }
     if (main_.collapses == before && !relax_total_turn() && !relax_inverted()) break;
   }
   Candidate c;
