@@ -260,6 +260,28 @@ TEST(CliSimplify, InvertedFacesAreAnOptionAndMeasureCountsThem) {
   EXPECT_FALSE(std::filesystem::exists(dir / "t.ply"));
 }
 
+TEST(CliSimplify, AnOptionTheMethodDoesNotReadIsRefused) {
+  // Ignored in silence, --inverted-faces with schroeder or --seed with quadric would look as if it
+  // had done something: each is a usage error naming the option, and nothing is written.
+  test::ScratchDir dir("cli-simplify-method-options");
+  ASSERT_EQ(run(dir, "generate sphere -o s.ply").status, 0);
+  for (const std::string args :
+       {"--method schroeder --inverted-faces refuse", "--method schroeder --no-inverted-faces",
+        "--method schroeder --crease-weight 1", "--method schroeder --max-valence 8", "--feature-angle 20",
+        "--method hoppe --accumulate-error", "--seed 3", "--method edge-length --hoppe-samples 2",
+        "--method hoppe --crease-weight 1"}) {
+    const CliRun r = run(dir, "simplify s.ply -o out.ply --ratio 0.5 " + args);
+    EXPECT_EQ(r.status, 2) << args;
+    const std::string option = args.substr(args.rfind("--"), args.find(' ', args.rfind("--")) - args.rfind("--"));
+    EXPECT_NE(r.err.find(option + ": applies to"), std::string::npos) << args << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out.ply")) << args;
+  }
+  // And with the method that reads it, each is fine.
+  for (const std::string args : {"--method schroeder --feature-angle 20 --accumulate-error", "--method hoppe --seed 3",
+                                  "--crease-weight 1 --inverted-faces avoid --max-valence 8"})
+    EXPECT_EQ(run(dir, "simplify s.ply -o out.ply --ratio 0.5 " + args).status, 0) << args;
+}
+
 TEST(CliSimplify, TheTotalTurnLimitIsAnOptionToo) {
   // Held to 30 degrees from their input orientation, faces of a thin torus stop the run sooner than at
   // the default; outside 1..180 degrees the value is refused before anything is read.

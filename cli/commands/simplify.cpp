@@ -301,6 +301,25 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->excludes("--inverted-faces");
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
   sub->add_flag("--json", opt->json, "Print the result as JSON on stdout");
+  // An option the chosen method does not read would be ignored in silence: refuse it before anything is read.
+  sub->parse_complete_callback([opt, sub] {
+    const std::string& m = opt->method;
+    auto refuse_unless = [&](bool applies, std::initializer_list<const char*> names, const char* which) {
+      if (applies) return;
+      for (const char* name : names)
+        if (sub->count(name) > 0)
+          throw CLI::ValidationError(name, fmt::format("applies to {}, not to --method {}", which, m));
+    };
+    refuse_unless(m != "schroeder",
+                  {"--placement", "--preserve-boundary", "--lock-boundary", "--allow-topology-change",
+                   "--max-normal-change", "--max-total-normal-change", "--crease-weight", "--attribute-weights",
+                   "--lane-faces", "--max-valence", "--inverted-faces", "--no-inverted-faces"},
+                  "the edge-collapse methods (quadric, hoppe, edge-length)");
+    refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
+    refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",
+                                 "--hoppe-crease-angle"}, "--method hoppe");
+    refuse_unless(m == "quadric", {"--crease-weight"}, "--method quadric");
+  });
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
 Examples:
   lodkit simplify bunny.ply -o bunny_10k.ply --faces 10000
