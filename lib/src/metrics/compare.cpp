@@ -263,13 +263,10 @@ Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options) 
 Index count_flipped_faces(const Mesh& reference, const Mesh& mesh) {
   if (reference.num_faces() == 0) return 0;
   const detail::AabbTree tree(reference);
-  Index flipped = 0;
+  Index flipped = 0, hint = -1;
   for (Index f = 0; f < mesh.num_faces(); ++f) {
     const Eigen::Vector3d a = corner(mesh, f, 0), b = corner(mesh, f, 1), c = corner(mesh, f, 2);
-    const auto hit = tree.closest((a + b + c) / 3.0);
-    const Eigen::Vector3d p = corner(reference, hit.face, 0), q = corner(reference, hit.face, 1),
-                          r = corner(reference, hit.face, 2);
-    if ((b - a).cross(c - a).dot((q - p).cross(r - p)) < 0) ++flipped;
+    flipped += tree.facing_against((a + b + c) / 3.0, (b - a).cross(c - a), hint);
   }
   return flipped;
 }
