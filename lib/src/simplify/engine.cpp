@@ -1141,9 +1141,8 @@ SimplifyResult Engine::run(Index target) {
   // every edge left once more, and go on while that finds collapses.
   // When that finds none, a default limit on the turn from the input shape may still give way (the turn is
   // checked at the top of the queue, not in rating: an empty rating leaves nothing for it to free), and
-  // then InvertedFaces::Avoid, for a few collapses at a time.
-  // InvertedFaces::Avoid gives way a few collapses at a time (a tenth of what is left to remove),
-  // then holds again: faces that face against the input are let be only where they are needed.
+  // then InvertedFaces::Avoid, a twentieth of what is left to remove at a time before it holds again:
+  // faces that face against the input are let be only where they are needed.
   while (!deferred && s_.alive_faces > target) {
     std::vector<HeapEntry> entries = rate_all(remaining_edges());
     if (entries.empty()) break;
