@@ -252,7 +252,7 @@ TEST(CliSimplify, InvertedFacesAreAnOptionAndMeasureCountsThem) {
   EXPECT_NE(stuck["hint"].get<std::string>().find("--inverted-faces avoid"), std::string::npos) << stuck.dump();
   const auto avoided = measured("--faces 8 --inverted-faces avoid");
   EXPECT_LT(avoided["faces_out"].get<int>(), stuck["faces_out"].get<int>());
-  EXPECT_EQ(avoided["inverted_allowed_at_faces"].get<int>(), stuck["faces_out"].get<int>()) << avoided.dump();
+  EXPECT_GT(avoided["inverted_allowed_at_faces"].get<int>(), stuck["faces_out"].get<int>()) << avoided.dump();
   EXPECT_NE(avoided["reason_text"].get<std::string>().find("let face against the input"), std::string::npos);
   // A mode that is not one is refused before anything is read, as is naming both options.
   EXPECT_NE(run(dir, "simplify lens.ply -o t.ply --inverted-faces never").status, 0);

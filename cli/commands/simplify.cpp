@@ -66,7 +66,8 @@ std::optional<std::string> stop_hint(const SimplifyResult& r, const SimplifyCliO
                         hint.empty() ? "" : "; ", r.blocked.flips, r.blocked.remaining, o.max_normal_change);
   if (r.blocked.inverted > 0)
     hint += fmt::format("{}{} of the {} edges left would leave a face facing against the input; with "
-                        "--inverted-faces avoid the run goes on where only those are left, and may leave some",
+                        "--inverted-faces avoid such a collapse waits until the others cost four times as much, so the run "
+                        "goes on and may leave some",
                         hint.empty() ? "" : "; ", r.blocked.inverted, r.blocked.remaining);
   if (hint.empty()) return std::nullopt;
   return hint + " (docs/commands/simplify.md)";
@@ -293,8 +294,8 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
   sub->add_option("--inverted-faces", opt->inverted_faces,
-                  "Collapses that leave a face facing against the nearest input face: allow (no check), avoid (refuse "
-                  "them while others remain, then allow a few at a time), refuse (never; may stop short of the target, and says so). Default: "
+                  "Collapses that leave a face facing against the nearest input face: allow (no check), avoid (such a "
+                  "collapse waits until the others cost four times as much), refuse (never; may stop short of the target, and says so). Default: "
                   "allow")
       ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
   sub->add_flag("--no-inverted-faces", opt->no_inverted_faces, "The same as --inverted-faces refuse")

@@ -40,7 +40,7 @@ enum class SimplifyMethod { Quadric, Hoppe, EdgeLength };
 /// side of a thin part, a crossing component) and face against it.
 enum class InvertedFaces {
   Allow,   ///< no check beyond the flip checks
-  Avoid,   ///< refuse such collapses while others remain; where only they are left, allow a few, then refuse again
+  Avoid,   ///< such a collapse waits in the queue until the others cost four times as much, then is let be
   Refuse,  ///< refuse every such collapse, and stop short of the target if need be
 };
 
@@ -194,8 +194,8 @@ struct SimplifyResult {
   /// Faces left when the run, stuck above its target under the method's default limit on a face's turn
   /// from its input shape, went on with 90 degrees (see max_total_normal_change_deg); unset if it did not.
   std::optional<Index> turn_limit_relaxed_at;
-  /// Faces left when the run, stuck above its target with InvertedFaces::Avoid, first went on allowing
-  /// faces that face against the input; unset if it did not.
+  /// Faces left when InvertedFaces::Avoid first let a face face against the input (the others cost four
+  /// times as much); unset if it did not. Where lanes ran, the faces when their pass began.
   std::optional<Index> inverted_allowed_at;
   double seconds = 0.0;
   std::vector<Index> vertex_origin; ///< for each output vertex, its input vertex
