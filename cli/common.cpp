@@ -73,6 +73,26 @@ LengthArgument parse_length(const std::string& text, const std::string& option) 
   return length;
 }
 
+namespace {
+
+CLI::Validator number_check(bool above_zero) {
+  return CLI::Validator(
+      [above_zero](std::string& text) -> std::string {
+        double value = 0;
+        if (!CLI::detail::lexical_cast(text, value) || std::isnan(value)) return text + " is not a number";
+        if (!std::isfinite(value)) return text + " is not a finite number";
+        if (above_zero && !(value > 0)) return text + " is not above 0";
+        if (!above_zero && !(value >= 0)) return text + " is negative";
+        return {};
+      },
+      above_zero ? "POSITIVE" : "NONNEGATIVE");
+}
+
+}  // namespace
+
+const CLI::Validator kNonNegative = number_check(false);
+const CLI::Validator kPositive = number_check(true);
+
 std::string thousands(long long n) {
   std::string digits = std::to_string(n < 0 ? -n : n), out;
   for (std::size_t i = 0; i < digits.size(); ++i) {

@@ -57,6 +57,32 @@ TEST(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(run(dir, "convert a.obj b.drc --quantize 99").status, 2);
 }
 
+TEST(Cli, ANumberOptionSaysBrieflyWhatIsWrongWithItsValue) {
+  // CLI11's own checks named their upper bound, the largest double, in 310 digits, and called a word
+  // out of range.
+  test::ScratchDir dir("cli-numbers");
+  ASSERT_EQ(run(dir, "generate grid -o g.ply").status, 0);
+  const struct {
+    const char* args;
+    const char* says;
+  } cases[] = {
+      {"simplify g.ply -o s.ply --crease-weight -1", "--crease-weight: -1 is negative"},
+      {"simplify g.ply -o s.ply --crease-weight abc", "--crease-weight: abc is not a number"},
+      {"simplify g.ply -o s.ply --crease-weight inf", "--crease-weight: inf is not a finite number"},
+      {"simplify g.ply -o s.ply --attribute-weights 0,x,1", "--attribute-weights: x is not a number"},
+      {"simplify g.ply -o s.ply --faces -3", "--faces: -3 is negative"},
+      {"compare g.ply g.ply --samples 0", "--samples: 0 is not above 0"},
+  };
+  for (const auto& c : cases) {
+    const CliRun r = run(dir, c.args);
+    EXPECT_EQ(r.status, 2) << c.args;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_LT(r.err.size(), 200u) << c.args << ": " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "s.ply"));
+  EXPECT_EQ(run(dir, "simplify g.ply -o s.ply --crease-weight 2.5 --faces 8").status, 0);
+}
+
 TEST(Cli, GeneratedTorusIsClosedManifoldGenusOne) {
   test::ScratchDir dir("cli");
   ASSERT_EQ(run(dir, "generate torus -o t.ply").status, 0);

@@ -29,7 +29,7 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
   sub->add_option("a", opt->a, "First mesh (percentages refer to its bounding-box diagonal)")->required();
   sub->add_option("b", opt->b, "Second mesh")->required();
   sub->add_option("--samples", opt->samples, "Face samples per direction (default 10 per face of the larger mesh)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   sub->add_flag("--json", opt->json, "Print one JSON object");
   sub->footer(R"(Examples:
   lodkit compare bunny.ply bunny_10k.ply

@@ -52,7 +52,7 @@ Command add_csg_command(CLI::App& app, const GlobalOptions& global) {
   CLI::App* tree = sub->add_subcommand("tree", "Evaluate a CSG tree (JSON) of primitives, meshes and transforms");
   tree->add_option("model", opt->tree, "The tree, e.g. data/csg/housing.json")->required()->check(CLI::ExistingFile);
   tree->add_option("-o,--output", opt->output, "Output mesh")->required();
-  tree->add_option("--tolerance", opt->tolerance, "Chordal tolerance of curved primitives")->check(CLI::PositiveNumber)
+  tree->add_option("--tolerance", opt->tolerance, "Chordal tolerance of curved primitives")->check(kPositive)
       ->capture_default_str();
   tree->add_flag("--exact", opt->exact, "Exact constructions from the start");
   tree->add_option("--split-at-parts", opt->split_at_parts,

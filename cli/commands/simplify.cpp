@@ -242,7 +242,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::IsMember({"quadric", "hoppe", "edge-length", "schroeder"}))->capture_default_str();
   sub->add_option("--placement", opt->placement, "optimal, endpoint or midpoint")
       ->check(CLI::IsMember({"optimal", "endpoint", "midpoint"}))->capture_default_str();
-  sub->add_option("--faces", opt->faces, "Target face count")->check(CLI::NonNegativeNumber);
+  sub->add_option("--faces", opt->faces, "Target face count")->check(kNonNegative);
   sub->add_option("--ratio", opt->ratio, "Target as a fraction of the input faces (0-1)")->check(CLI::Range(0.0, 1.0));
   sub->add_option("--max-error", opt->max_error, "Largest error per collapse: a distance, or N% of the diagonal");
   sub->add_flag("--preserve-boundary", opt->preserve_boundary, "Weight boundary constraint planes 100x higher");
@@ -258,14 +258,14 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::Range(1.0, 180.0));
   sub->add_option("--crease-weight", opt->crease_weight,
                   "Weight of the planes that keep thin fins, spikes and sharp ridges (quadric; 0 = off)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(kNonNegative)->capture_default_str();
   sub->add_option("--attribute-weights", opt->attribute_weights,
                   "Weights of normal, UV and colour error against geometry, e.g. 0.5,1,1 (quadric; default off)")
-      ->delimiter(',')->check(CLI::NonNegativeNumber);
+      ->delimiter(',')->check(kNonNegative);
   sub->add_option("--feature-angle", opt->feature_angle, "schroeder: dihedral angle that makes a feature edge (degrees)")
       ->check(CLI::Range(0.1, 180.0))->capture_default_str();
   sub->add_option("--aspect-ratio", opt->aspect_ratio, "schroeder: smallest split-line quality for re-triangulation")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(kNonNegative)->capture_default_str();
   sub->add_flag("--accumulate-error", opt->accumulate_error, "schroeder: add each removal's error to its neighbours");
   sub->add_option("--seed", opt->seed, "Seed for hoppe's surface samples")->capture_default_str();
   sub->add_option("--hoppe-samples", opt->hoppe_samples,
@@ -278,7 +278,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::Range(0.0, 1000.0))->capture_default_str();
   sub->add_option("--hoppe-min-points", opt->hoppe_min_points,
                   "hoppe: the fewest sample points in all; smaller meshes get more per face (0 = no floor)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(kNonNegative)->capture_default_str();
   sub->add_option("--hoppe-crease-angle", opt->hoppe_crease_angle,
                   "hoppe: input edges whose faces turn by more than this get points along them, so that a sharp "
                   "edge cannot be bevelled unseen (degrees; 180 = none)")
@@ -286,11 +286,11 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--lane-faces", opt->lane_faces,
                   "Meshes of twice this many faces are first simplified in slabs of about this many faces side by "
                   "side (0 = one queue throughout; default 125000 for quadric and edge-length, 8000 for hoppe)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   sub->add_option("--max-valence", opt->max_valence,
                   "No collapse may leave a vertex with more faces around it than this, unless it had as many before "
                   "(0 = no limit; default 24 for hoppe, which otherwise grows hubs on flat parts; none for the others)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
   sub->add_option("--inverted-faces", opt->inverted_faces,
