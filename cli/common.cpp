@@ -75,12 +75,18 @@ LengthArgument parse_length(const std::string& text, const std::string& option) 
 
 namespace {
 
+// Why `text` is not a finite number, or "" (and the number in `value`).
+std::string not_a_number(const std::string& text, double& value) {
+  if (!CLI::detail::lexical_cast(text, value) || std::isnan(value)) return text + " is not a number";
+  if (!std::isfinite(value)) return text + " is not a finite number";
+  return {};
+}
+
 CLI::Validator number_check(bool above_zero) {
   return CLI::Validator(
       [above_zero](std::string& text) -> std::string {
         double value = 0;
-        if (!CLI::detail::lexical_cast(text, value) || std::isnan(value)) return text + " is not a number";
-        if (!std::isfinite(value)) return text + " is not a finite number";
+        if (std::string why = not_a_number(text, value); !why.empty()) return why;
         if (above_zero && !(value > 0)) return text + " is not above 0";
         if (!above_zero && !(value >= 0)) return text + " is negative";
         return {};
@@ -89,6 +95,17 @@ CLI::Validator number_check(bool above_zero) {
 }
 
 }  // namespace
+
+CLI::Validator in_range(double low, double high) {
+  return CLI::Validator(
+      [low, high](std::string& text) -> std::string {
+        double value = 0;
+        if (std::string why = not_a_number(text, value); !why.empty()) return why;
+        if (!(value >= low && value <= high)) return fmt::format("{} is not between {} and {}", text, low, high);
+        return {};
+      },
+      fmt::format("[{} - {}]", low, high));
+}
 
 const CLI::Validator kNonNegative = number_check(false);
 const CLI::Validator kPositive = number_check(true);

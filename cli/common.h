@@ -48,11 +48,13 @@ void write_output(const Mesh& mesh, const std::string& path, const std::optional
 /// "12,345"
 std::string thousands(long long n);
 
-/// Option checks for numbers of 0 or more, and above 0. CLI11's NonNegativeNumber and PositiveNumber
-/// say the same, but name their upper bound, the largest double, in 310 digits, and call a word that is
-/// no number out of range: "--crease-weight: abc is not a number".
+/// Option checks for numbers of 0 or more, above 0, and from `low` to `high`. CLI11's NonNegativeNumber,
+/// PositiveNumber and Range say the same, but the first two name their upper bound, the largest double,
+/// in 310 digits, and all three call a word that is no number out of range: here "--crease-weight: abc
+/// is not a number", "--ratio: 2 is not between 0 and 1".
 extern const CLI::Validator kNonNegative;
 extern const CLI::Validator kPositive;
+CLI::Validator in_range(double low, double high);
 
 /// A non-negative length given on the command line: "0.5" is absolute, "0.5%" a percentage (of a
 /// diagonal, say); `value` is then the fraction (0.005).

@@ -59,7 +59,7 @@ TEST(Cli, UsageErrorsExitTwo) {
 
 TEST(Cli, ANumberOptionSaysBrieflyWhatIsWrongWithItsValue) {
   // CLI11's own checks named their upper bound, the largest double, in 310 digits, and called a word
-  // out of range.
+  // out of range ("Value half not in range 0.000000 to 1.000000").
   test::ScratchDir dir("cli-numbers");
   ASSERT_EQ(run(dir, "generate grid -o g.ply").status, 0);
   const struct {
@@ -72,6 +72,9 @@ TEST(Cli, ANumberOptionSaysBrieflyWhatIsWrongWithItsValue) {
       {"simplify g.ply -o s.ply --attribute-weights 0,x,1", "--attribute-weights: x is not a number"},
       {"simplify g.ply -o s.ply --faces -3", "--faces: -3 is negative"},
       {"compare g.ply g.ply --samples 0", "--samples: 0 is not above 0"},
+      {"simplify g.ply -o s.ply --ratio 2", "--ratio: 2 is not between 0 and 1"},
+      {"simplify g.ply -o s.ply --ratio half", "--ratio: half is not a number"},
+      {"convert g.ply s.ply --quantize 99", "--quantize: 99 is not between 0 and 30"},
   };
   for (const auto& c : cases) {
     const CliRun r = run(dir, c.args);

@@ -73,9 +73,9 @@ Command add_convert_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_flag("--no-uvs", opt->no_uvs, "Do not write texture coordinates");
   sub->add_flag("--no-colours", opt->no_colours, "Do not write colours");
   sub->add_option("--quantize", opt->quantize, "Draco position quantisation bits (0 = none; default 14)")
-      ->check(CLI::Range(0, 30));
+      ->check(in_range(0, 30));
   sub->add_option("--compression-level", opt->compression_level, "Draco compression level 0-10")
-      ->check(CLI::Range(0, 10))->capture_default_str();
+      ->check(in_range(0, 10))->capture_default_str();
   sub->footer(R"(Examples:
   lodkit convert bunny.obj bunny.ply
   lodkit convert scan.stl scan.ply --weld --drop-unreferenced

@@ -290,12 +290,12 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
   build->add_option("--base-faces", opt->base_faces, "Stop collapsing at this many faces (default: as far as legal)")
       ->check(kNonNegative);
   build->add_option("--quantize", opt->quantize, "Position bits (quantised, compact stream); 0 = lossless")
-      ->check(CLI::Range(0, 30))->capture_default_str();
+      ->check(in_range(0, 30))->capture_default_str();
   build->add_flag("--draco", opt->draco, "Compress the base mesh with Draco (needs --quantize)");
   build->add_flag("--keep-order", opt->keep_order, "Store the input order in a quantised stream too");
   build->add_flag("--measure", opt->measure,
                   "Measure levels' distances to the input (compare, levels 1.41x apart in faces) for selection");
-  build->add_option("--block", opt->block, "Splits per checksummed block")->check(CLI::Range(1, 1 << 24))->capture_default_str();
+  build->add_option("--block", opt->block, "Splits per checksummed block")->check(in_range(1, 1 << 24))->capture_default_str();
   build->add_option("--attribute-weights", opt->attribute_weights, "Normal, UV and colour weights (quadric), e.g. 0,1,0")
       ->delimiter(',')->check(kNonNegative);
   build->add_flag("--drop-normals", opt->drop_normals,
@@ -312,7 +312,7 @@ Examples:
 
   CLI::App* info = pm->add_subcommand("info", "Levels, sizes and error bounds of a .pm file");
   info->add_option("input", opt->input, "A .pm file")->required();
-  info->add_option("--rows", opt->rows, "Levels in the table")->check(CLI::Range(2, 10000));
+  info->add_option("--rows", opt->rows, "Levels in the table")->check(in_range(2, 10000));
   info->add_flag("--json", opt->json, "Print as JSON");
   info->footer("Example:\n  lodkit pm info bunny.pm --json");
 
@@ -321,13 +321,13 @@ Examples:
   extract->add_option("-o,--output", opt->output, "Output mesh, or - for stdout (with --format)")->required();
   extract->add_option("--format", opt->format, "Format of stdout")->check(format_validator());
   extract->add_option("--faces", opt->faces, "The finest level with at most this many faces")->check(kNonNegative);
-  extract->add_option("--ratio", opt->ratio, "... at most this fraction of the full face count")->check(CLI::Range(0.0, 1.0));
+  extract->add_option("--ratio", opt->ratio, "... at most this fraction of the full face count")->check(in_range(0.0, 1.0));
   extract->add_option("--max-error", opt->max_error, "The coarsest level whose error bound is at most this distance")
       ->check(kNonNegative);
   extract->add_option("--pixel-error", opt->pixel_error, "The coarsest level whose bound projects to at most this many pixels")
       ->check(kNonNegative);
   extract->add_option("--distance", opt->distance, "Eye to bounding-sphere centre (with --pixel-error)")->capture_default_str();
-  extract->add_option("--fov", opt->fov, "Vertical field of view, degrees")->check(CLI::Range(0.01, 179.99))->capture_default_str();
+  extract->add_option("--fov", opt->fov, "Vertical field of view, degrees")->check(in_range(0.01, 179.99))->capture_default_str();
   extract->add_option("--viewport", opt->viewport, "Viewport height, pixels")->check(kPositive)->capture_default_str();
   extract->add_flag("--input-order", opt->input_order, "Vertices and faces in input order (reads the whole file)");
   extract->add_flag("--certified", opt->certified, "Select by the guaranteed bound even when the stream has measured errors");
@@ -346,7 +346,7 @@ Examples:
   morph->add_option("--from", opt->from, "Coarse level: at most this many faces")->required()->check(kNonNegative);
   morph->add_option("--to", opt->to, "Fine level: at most this many faces")->required()->check(kNonNegative);
   morph->add_option("--alpha", opt->alpha, "Blend weight: 0 looks like --from, 1 is --to");
-  morph->add_option("--frames", opt->frames, "Write this many frames OUT_000 ... with alpha from 0 to 1")->check(CLI::Range(1, 100000));
+  morph->add_option("--frames", opt->frames, "Write this many frames OUT_000 ... with alpha from 0 to 1")->check(in_range(1, 100000));
   morph->add_option("-o,--output", opt->output, "Output mesh (or frame name pattern)")->required();
   morph->add_option("--format", opt->format, "Format of stdout")->check(format_validator());
   morph->add_flag("--input-order", opt->input_order, "Vertices and faces in input order");

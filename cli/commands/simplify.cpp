@@ -243,19 +243,19 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--placement", opt->placement, "optimal, endpoint or midpoint")
       ->check(CLI::IsMember({"optimal", "endpoint", "midpoint"}))->capture_default_str();
   sub->add_option("--faces", opt->faces, "Target face count")->check(kNonNegative);
-  sub->add_option("--ratio", opt->ratio, "Target as a fraction of the input faces (0-1)")->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--ratio", opt->ratio, "Target as a fraction of the input faces (0-1)")->check(in_range(0.0, 1.0));
   sub->add_option("--max-error", opt->max_error, "Largest error per collapse: a distance, or N% of the diagonal");
   sub->add_flag("--preserve-boundary", opt->preserve_boundary, "Weight boundary constraint planes 100x higher");
   sub->add_flag("--lock-boundary", opt->lock_boundary, "Never move or remove boundary vertices");
   sub->add_flag("--allow-topology-change", opt->allow_topology_change,
                 "Skip the link condition and flip checks (shows how naive methods fail)");
   sub->add_option("--max-normal-change", opt->max_normal_change, "Largest turn of a face in one collapse (degrees)")
-      ->check(CLI::Range(1.0, 180.0))->capture_default_str();
+      ->check(in_range(1.0, 180.0))->capture_default_str();
   sub->add_option("--max-total-normal-change", opt->max_total_normal_change,
                   "Largest turn of a face from its input orientation over all collapses, never below "
                   "--max-normal-change (degrees; default 90 for quadric, 60 for hoppe and edge-length, raised "
                   "to 90 where 60 alone would stop the run short of its target; a value given here is kept)")
-      ->check(CLI::Range(1.0, 180.0));
+      ->check(in_range(1.0, 180.0));
   sub->add_option("--crease-weight", opt->crease_weight,
                   "Weight of the planes that keep thin fins, spikes and sharp ridges (quadric; 0 = off)")
       ->check(kNonNegative)->capture_default_str();
@@ -263,7 +263,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   "Weights of normal, UV and colour error against geometry, e.g. 0.5,1,1 (quadric; default off)")
       ->delimiter(',')->check(kNonNegative);
   sub->add_option("--feature-angle", opt->feature_angle, "schroeder: dihedral angle that makes a feature edge (degrees)")
-      ->check(CLI::Range(0.1, 180.0))->capture_default_str();
+      ->check(in_range(0.1, 180.0))->capture_default_str();
   sub->add_option("--aspect-ratio", opt->aspect_ratio, "schroeder: smallest split-line quality for re-triangulation")
       ->check(kNonNegative)->capture_default_str();
   sub->add_flag("--accumulate-error", opt->accumulate_error, "schroeder: add each removal's error to its neighbours");
@@ -271,18 +271,18 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--hoppe-samples", opt->hoppe_samples,
                   "hoppe: random surface points per face besides the vertices, on average (fewer than 4 leave "
                   "the springs strong: slow and less accurate on smooth meshes)")
-      ->check(CLI::Range(0.0, 1000.0))->capture_default_str();
+      ->check(in_range(0.0, 1000.0))->capture_default_str();
   sub->add_option("--hoppe-every-face", opt->hoppe_every_face,
                   "hoppe: of those, how many go on every face however small; the rest are spread by area "
                   "(default 2; 1000: all per face, as before session 27)")
-      ->check(CLI::Range(0.0, 1000.0))->capture_default_str();
+      ->check(in_range(0.0, 1000.0))->capture_default_str();
   sub->add_option("--hoppe-min-points", opt->hoppe_min_points,
                   "hoppe: the fewest sample points in all; smaller meshes get more per face (0 = no floor)")
       ->check(kNonNegative)->capture_default_str();
   sub->add_option("--hoppe-crease-angle", opt->hoppe_crease_angle,
                   "hoppe: input edges whose faces turn by more than this get points along them, so that a sharp "
                   "edge cannot be bevelled unseen (degrees; 180 = none)")
-      ->check(CLI::Range(0.0, 180.0))->capture_default_str();
+      ->check(in_range(0.0, 180.0))->capture_default_str();
   sub->add_option("--lane-faces", opt->lane_faces,
                   "Meshes of twice this many faces are first simplified in slabs of about this many faces side by "
                   "side (0 = one queue throughout; default 125000 for quadric and edge-length, 8000 for hoppe)")

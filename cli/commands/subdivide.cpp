@@ -31,12 +31,12 @@ Command add_subdivide_command(CLI::App& app, const GlobalOptions& global) {
                   "loop (triangles), catmull-clark or bilinear (polygons: quads in OBJ/OFF/PLY are kept)")
       ->capture_default_str()->check(CLI::IsMember({"loop", "catmull-clark", "bilinear"}));
   sub->add_option("-l,--levels", opt->subdivide.levels, "Refinement levels (faces grow 4x per level)")
-      ->capture_default_str()->check(CLI::Range(0, 10));
+      ->capture_default_str()->check(in_range(0, 10));
   sub->add_option("-t,--tolerance", opt->tolerance,
                   "Instead of --levels: the fewest levels whose surface is within this Hausdorff "
                   "distance of the next level's; absolute (0.001) or % of the diagonal (0.1%)");
   sub->add_option("--max-levels", opt->subdivide.max_levels, "Cap for --tolerance")->capture_default_str()
-      ->check(CLI::Range(0, 10));
+      ->check(in_range(0, 10));
   sub->add_option("--boundary", opt->boundary,
                   "Boundary rule: none (boundary faces shrink away), edge (smooth boundary curves), "
                   "edge-and-corner (keep valence-2 corners sharp)")

@@ -53,7 +53,7 @@ Command add_terrain_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--base-format", opt->base_format, "Format of the base when read from stdin")
       ->check(format_validator());
   sub->add_option("-l,--levels", opt->terrain.levels, "1-to-4 subdivisions: faces = base faces x 4^levels")
-      ->capture_default_str()->check(CLI::Range(0, 15));
+      ->capture_default_str()->check(in_range(0, 15));
   sub->add_option("-H,--roughness", opt->terrain.roughness,
                   "Hurst exponent H in (0, 1]: sigma_l = sigma * 2^(-l H); higher is smoother")
       ->capture_default_str();
