@@ -86,6 +86,25 @@ TEST(Cli, ANumberOptionSaysBrieflyWhatIsWrongWithItsValue) {
   EXPECT_EQ(run(dir, "simplify g.ply -o s.ply --crease-weight 2.5 --faces 8").status, 0);
 }
 
+TEST(CliSimplify, AnInputOfDegenerateFacesOnlySaysSoAndIsNotMeasured) {
+  // Every face has a repeated corner: the engine drops them all, and --measure has no surface to measure.
+  // It used to fail there ("compare: the second mesh has no faces", exit 1) after the output was written.
+  test::ScratchDir dir("cli-degenerate");
+  test::write_text(dir / "flat.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 1 1\nf 2 2 3\n");
+  const CliRun text = run(dir, "simplify flat.obj -o s.ply --ratio 0.5 --measure");
+  EXPECT_EQ(text.status, 0) << text.err;
+  EXPECT_NE(text.err.find("dropped 2 degenerate faces"), std::string::npos) << text.err;
+  EXPECT_NE(text.err.find("not measured: the output has no faces"), std::string::npos) << text.err;
+  const CliRun json = run(dir, "simplify flat.obj -o s.ply --ratio 0.5 --measure --json");
+  ASSERT_EQ(json.status, 0) << json.err;
+  const auto j = nlohmann::json::parse(json.out);
+  EXPECT_EQ(j["dropped_degenerate_faces"].get<int>(), 2);
+  EXPECT_EQ(j["faces_out"].get<int>(), 0);
+  EXPECT_TRUE(j["measured"].is_null());
+  EXPECT_EQ(j["not_measured"].get<std::string>(), "the output has no faces");
+  EXPECT_EQ(read_mesh((dir / "s.ply").string()).num_faces(), 0);
+}
+
 TEST(Cli, GeneratedTorusIsClosedManifoldGenusOne) {
   test::ScratchDir dir("cli");
   ASSERT_EQ(run(dir, "generate torus -o t.ply").status, 0);

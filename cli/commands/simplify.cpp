@@ -87,9 +87,13 @@ struct Measured {
   Index inverted_faces = 0;
 };
 
-Measured measure(const Mesh& input, const Mesh& output) {
-  return {compare(input, output), count_flipped_faces(input, output)};
+// Nothing when the output has no faces (every face of the input was degenerate): there is no surface to
+// measure, and failing there, after the output was written, would report a run that did its job as failed.
+std::optional<Measured> measure(const Mesh& input, const Mesh& output) {
+  if (output.num_faces() == 0) return std::nullopt;
+  return Measured{compare(input, output), count_flipped_faces(input, output)};
 }
+constexpr const char* kNotMeasured = "the output has no faces";
 
 nlohmann::json measured_json(const Measured& m) {
   const Comparison& c = m.distances;
@@ -128,6 +132,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
                                     {"corner", c[4]}, {"above_threshold", r.remaining_above_threshold},
                                     {"no_triangulation", r.remaining_no_triangulation}}}};
     if (measured) j["measured"] = measured_json(*measured);
+    if (o.measure && !measured) j["measured"] = nullptr, j["not_measured"] = kNotMeasured;
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
     fmt::print(stderr, "simplify (schroeder): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", thousands(r.faces_in),
@@ -135,6 +140,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
     fmt::print(stderr, "  largest removal error {:.6g} ({:.4f}% of the diagonal){}\n", r.error, r.error * pct,
                d.accumulate_error ? ", accumulated" : "");
     if (measured) print_measured(*measured);
+    if (o.measure && !measured) fmt::print(stderr, "  not measured: {}\n", kNotMeasured);
     fmt::print(stderr, "  {}\n", r.reason_text);
   }
   return 0;
@@ -200,7 +206,8 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                      {"error_estimate_percent", r.error * pct},
                      {"reason", r.reason == StopReason::TargetReached ? "target" :
                                 r.reason == StopReason::ErrorLimit ? "error-limit" : "no-legal-collapse"},
-                     {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}, {"lanes", r.lanes}};
+                     {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}, {"lanes", r.lanes},
+                     {"dropped_degenerate_faces", r.dropped_degenerate_faces}};
     if (r.reason != StopReason::TargetReached) j["blocked"] = blocked_json(r.blocked);
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
     if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
@@ -211,6 +218,8 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       j["measured"]["mean"] = c.mean;
       j["measured"]["normal_deviation_mean_deg"] =
           0.5 * (c.a_to_b.normal_deviation_mean_deg + c.b_to_a.normal_deviation_mean_deg);
+    } else if (o.measure) {
+      j["measured"] = nullptr, j["not_measured"] = kNotMeasured;
     }
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
@@ -219,7 +228,11 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                r.seconds);
     fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
     if (r.lanes > 1) fmt::print(stderr, "  {} slabs simplified side by side, then one queue for the rest\n", r.lanes);
+    if (r.dropped_degenerate_faces > 0)
+      fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
+                 thousands(r.dropped_degenerate_faces));
     if (measured) print_measured(*measured);
+    if (o.measure && !measured) fmt::print(stderr, "  not measured: {}\n", kNotMeasured);
     fmt::print(stderr, "  {}\n", r.reason_text);
     if (hint) fmt::print(stderr, "  hint: {}\n", *hint);
   }
