@@ -103,6 +103,10 @@ TEST(CliSimplify, AnInputOfDegenerateFacesOnlySaysSoAndIsNotMeasured) {
   EXPECT_TRUE(j["measured"].is_null());
   EXPECT_EQ(j["not_measured"].get<std::string>(), "the output has no faces");
   EXPECT_EQ(read_mesh((dir / "s.ply").string()).num_faces(), 0);
+  // compare names the file that has no surface.
+  const CliRun compared = run(dir, "compare flat.obj s.ply");
+  EXPECT_EQ(compared.status, 1);
+  EXPECT_NE(compared.err.find("s.ply: has no faces"), std::string::npos) << compared.err;
 }
 
 TEST(Cli, GeneratedTorusIsClosedManifoldGenusOne) {

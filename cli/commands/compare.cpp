@@ -1,4 +1,5 @@
 // lodkit compare: Hausdorff, mean and RMS distance and normal deviation between two meshes.
+#include <lodkit/error.h>
 #include <lodkit/metrics.h>
 
 #include <fmt/format.h>
@@ -36,6 +37,9 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
   lodkit compare original.obj simplified.obj --json --samples 2000000)");
   return {sub, [opt] {
             const Mesh a = read_input(opt->a, std::nullopt), b = read_input(opt->b, std::nullopt);
+            // Named by file: the library can only say "the first mesh" or "the second".
+            for (const auto& [mesh, path] : {std::pair{&a, opt->a}, std::pair{&b, opt->b}})
+              if (mesh->num_faces() == 0) throw Error(fmt::format("{}: has no faces, so no surface to compare", path));
             CompareOptions o;
             o.samples = opt->samples;
             const Comparison c = compare(a, b, o);
