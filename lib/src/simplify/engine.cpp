@@ -100,8 +100,8 @@ class Engine {
     // The input's tree has no part in the setup: it is built alongside.
     tbb::task_group input_tree_task;
     inverted_mode_ = o_.inverted_faces.value_or(default_inverted_faces(o_.method));
-    refuse_inverted_ = inverted_mode_ != InvertedFaces::Allow && o_.preserve_topology;
-    if (refuse_inverted_)
+    check_inverted_ = inverted_mode_ != InvertedFaces::Allow && o_.preserve_topology;
+    if (check_inverted_)
       input_tree_task.run([&] {
         input_tree_ = std::make_unique<AabbTree>(mesh);
         input_tree_->prepare_facing();
@@ -151,6 +151,9 @@ class Engine {
   /// time, queued again to wait (true); when it comes back unchanged, let be (false, and `verdict` says
   /// whether the other checks pass).
   bool wait_inverted(Lane& lane, const HeapEntry& e, const Candidate& c, Rejection& verdict);
+  /// Collapse u -> v to p, refused only for faces facing against the input, let be after all: the
+  /// other checks' verdict, and where the run did so when it did.
+  Rejection let_inverted_be(Lane& lane, Index u, Index v, const Eigen::Vector3d& p);
   /// Whether face f, with corners `corners` and normal n, faces against the input face nearest its
   /// centroid (as count_flipped_faces() sees it), where in the input it did not. The search starts at
   /// the input face found nearest f last time (at first f itself: face f is input face f).
@@ -258,7 +261,7 @@ class Engine {
   SimplifyOptions o_;
   EngineState s_;
   InvertedFaces inverted_mode_;
-  bool refuse_inverted_;                  // faces facing against the input are refused (now)
+  bool check_inverted_;                   // faces facing against the input are checked (Avoid or Refuse)
   std::unique_ptr<AabbTree> input_tree_;  // the input, for the face nearest a new face (unless Allow)
   mutable std::vector<Index> nearest_input_;  // per face, the input face last found nearest (unless Allow)
   static constexpr std::int8_t kUnknown = -1;
@@ -683,7 +686,7 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p, bool inve
   };
   const bool v_moves = p != s_.position[v];
   for (const bool against_input : {false, true}) {
-    if (against_input && (!refuse_inverted_ || inverted_ok)) break;
+    if (against_input && (!check_inverted_ || inverted_ok)) break;
     if (const Rejection r = check(u, v, against_input); r != Rejection::None) return r;
     if (v_moves)
       if (const Rejection r = check(v, u, against_input); r != Rejection::None) return r;
@@ -1114,12 +1117,17 @@ bool Engine::wait_inverted(Lane& lane, const HeapEntry& e, const Candidate& c, R
     remember(later, c);
     return true;
   }
-  verdict = geometry(e.u, e.v, c.position, true);
-  if (verdict != Rejection::None) return false;
+  verdict = let_inverted_be(lane, e.u, e.v, c.position);
+  return false;
+}
+
+Rejection Engine::let_inverted_be(Lane& lane, Index u, Index v, const Eigen::Vector3d& p) {
+  const Rejection verdict = geometry(u, v, p, true);
+  if (verdict != Rejection::None) return verdict;
   lane.let_inverted = true;
   // Lanes run side by side with no common count: theirs is where their pass began (see lane_pass()).
   if (lane.region < 0 && !inverted_allowed_at_) inverted_allowed_at_ = s_.alive_faces;
-  return false;
+  return verdict;
 }
 
 std::vector<std::pair<Index, Index>> Engine::remaining_edges() {
@@ -1196,10 +1204,8 @@ SimplifyResult Engine::run(Index target) {
     if (const auto one = cheapest_boundary_collapse(main_)) deferred = one;
     Rejection verdict = evaluate(main_, deferred->first, deferred->second, c, true);
     // A waited entry was let be when it was found.
-    if (verdict == Rejection::Inverted && inverted_mode_ == InvertedFaces::Avoid) {
-      verdict = geometry(deferred->first, deferred->second, c.position, true);
-      if (verdict == Rejection::None && !inverted_allowed_at_) inverted_allowed_at_ = s_.alive_faces;
-    }
+    if (verdict == Rejection::Inverted && inverted_mode_ == InvertedFaces::Avoid)
+      verdict = let_inverted_be(main_, deferred->first, deferred->second, c.position);
     if (verdict == Rejection::None) collapse(main_, deferred->first, deferred->second, c);
   }
   collapses_ += main_.collapses;
