@@ -95,16 +95,25 @@ std::optional<Measured> measure(const Mesh& input, const Mesh& output) {
 }
 constexpr const char* kNotMeasured = "the output has no faces";
 
-nlohmann::json measured_json(const Measured& m) {
-  const Comparison& c = m.distances;
-  return {{"hausdorff", c.hausdorff}, {"hausdorff_percent", c.percent(c.hausdorff)}, {"rms", c.rms},
-          {"rms_percent", c.percent(c.rms)}, {"inverted_faces", m.inverted_faces}};
+// j["measured"], or null and j["not_measured"] when there was nothing to measure.
+void put_measured(nlohmann::json& j, const std::optional<Measured>& m) {
+  if (!m) {
+    j["measured"] = nullptr, j["not_measured"] = kNotMeasured;
+    return;
+  }
+  const Comparison& c = m->distances;
+  j["measured"] = {{"hausdorff", c.hausdorff}, {"hausdorff_percent", c.percent(c.hausdorff)}, {"rms", c.rms},
+                   {"rms_percent", c.percent(c.rms)}, {"inverted_faces", m->inverted_faces}};
 }
 
-void print_measured(const Measured& m) {
-  const Comparison& c = m.distances;
+void print_measured(const std::optional<Measured>& m) {
+  if (!m) {
+    fmt::print(stderr, "  not measured: {}\n", kNotMeasured);
+    return;
+  }
+  const Comparison& c = m->distances;
   fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%), RMS {:.6g} ({:.4f}%), {} faces facing against the input\n",
-             c.hausdorff, c.percent(c.hausdorff), c.rms, c.percent(c.rms), m.inverted_faces);
+             c.hausdorff, c.percent(c.hausdorff), c.rms, c.percent(c.rms), m->inverted_faces);
 }
 
 int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {
@@ -131,16 +140,14 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
                      {"remaining", {{"simple", c[0]}, {"complex", c[1]}, {"boundary", c[2]}, {"interior_edge", c[3]},
                                     {"corner", c[4]}, {"above_threshold", r.remaining_above_threshold},
                                     {"no_triangulation", r.remaining_no_triangulation}}}};
-    if (measured) j["measured"] = measured_json(*measured);
-    if (o.measure && !measured) j["measured"] = nullptr, j["not_measured"] = kNotMeasured;
+    if (o.measure) put_measured(j, measured);
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
     fmt::print(stderr, "simplify (schroeder): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", thousands(r.faces_in),
                thousands(r.faces_out), thousands(r.vertices_in), thousands(r.vertices_out), r.seconds);
     fmt::print(stderr, "  largest removal error {:.6g} ({:.4f}% of the diagonal){}\n", r.error, r.error * pct,
                d.accumulate_error ? ", accumulated" : "");
-    if (measured) print_measured(*measured);
-    if (o.measure && !measured) fmt::print(stderr, "  not measured: {}\n", kNotMeasured);
+    if (o.measure) print_measured(measured);
     fmt::print(stderr, "  {}\n", r.reason_text);
   }
   return 0;
@@ -212,14 +219,12 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
     if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
     if (hint) j["hint"] = *hint;
+    if (o.measure) put_measured(j, measured);
     if (measured) {
       const Comparison& c = measured->distances;
-      j["measured"] = measured_json(*measured);
       j["measured"]["mean"] = c.mean;
       j["measured"]["normal_deviation_mean_deg"] =
           0.5 * (c.a_to_b.normal_deviation_mean_deg + c.b_to_a.normal_deviation_mean_deg);
-    } else if (o.measure) {
-      j["measured"] = nullptr, j["not_measured"] = kNotMeasured;
     }
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
@@ -231,8 +236,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     if (r.dropped_degenerate_faces > 0)
       fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
                  thousands(r.dropped_degenerate_faces));
-    if (measured) print_measured(*measured);
-    if (o.measure && !measured) fmt::print(stderr, "  not measured: {}\n", kNotMeasured);
+    if (o.measure) print_measured(measured);
     fmt::print(stderr, "  {}\n", r.reason_text);
     if (hint) fmt::print(stderr, "  hint: {}\n", *hint);
   }
