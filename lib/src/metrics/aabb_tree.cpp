@@ -46,40 +46,43 @@ int subtree_nodes(int n) { return subtree_nodes_pair(n).first; }
 AabbTree::AabbTree(const Mesh& mesh) : mesh_(mesh) {
   const Index n = mesh.num_faces();
   order_.resize(static_cast<std::size_t>(n));
-  std::vector<Eigen::Vector3d> centroids(static_cast<std::size_t>(n));
+  // The faces are split by their centroids, kept beside their numbers so that the splits read memory
+  // in order (in floats: they only decide the tree's shape, never an answer).
+  std::vector<Centred> centred(static_cast<std::size_t>(n));
   tbb::parallel_for(Index{0}, n, [&](Index f) {
-    order_[f] = f;
-    centroids[f] = (mesh.positions.row(mesh.triangles(f, 0)) + mesh.positions.row(mesh.triangles(f, 1)) +
-                    mesh.positions.row(mesh.triangles(f, 2))).transpose() / 3.0;
+    const Eigen::Vector3d centroid = (mesh.positions.row(mesh.triangles(f, 0)) + mesh.positions.row(mesh.triangles(f, 1)) +
+                                      mesh.positions.row(mesh.triangles(f, 2))).transpose() / 3.0;
+    centred[f] = {centroid.cast<float>(), f};
   });
   nodes_.resize(n > 0 ? static_cast<std::size_t>(subtree_nodes(static_cast<int>(n))) : 1);
-  if (n > 0) build(0, 1, 0, static_cast<int>(n), centroids);
+  if (n > 0) build(0, 1, 0, static_cast<int>(n), centred);
+  tbb::parallel_for(Index{0}, n, [&](Index i) { order_[i] = centred[i].face; });
 }
 
-void AabbTree::build(int node, int free, int begin, int end, const std::vector<Eigen::Vector3d>& centroids) {
+void AabbTree::build(int node, int free, int begin, int end, std::vector<Centred>& centred) {
   Node& out = nodes_[node];
   if (end - begin <= kLeafSize) {
     for (int i = begin; i < end; ++i)
-      for (int k = 0; k < 3; ++k) out.box.extend(mesh_.positions.row(mesh_.triangles(order_[i], k)).transpose());
+      for (int k = 0; k < 3; ++k) out.box.extend(mesh_.positions.row(mesh_.triangles(centred[i].face, k)).transpose());
     out.first = begin;
     out.count = end - begin;
     return;
   }
-  Eigen::AlignedBox3d centre_box;
-  for (int i = begin; i < end; ++i) centre_box.extend(centroids[order_[i]]);
+  Eigen::AlignedBox3f centre_box;
+  for (int i = begin; i < end; ++i) centre_box.extend(centred[i].centre);
   int axis;
   centre_box.diagonal().maxCoeff(&axis);
   const int mid = (begin + end) / 2;
-  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                   [&](Index a, Index b) { return centroids[a][axis] < centroids[b][axis]; });
+  std::nth_element(centred.begin() + begin, centred.begin() + mid, centred.begin() + end,
+                   [&](const Centred& a, const Centred& b) { return a.centre[axis] < b.centre[axis]; });
   // The children are a pair at `free`; then the left subtree's other nodes, then the right's: each
   // subtree owns a block of indices, so the halves can be built side by side.
   const int left = free, right = free + 1;
   const int left_free = free + 2, right_free = left_free + subtree_nodes(mid - begin) - 1;
   out.first = left;
   out.count = 0;
-  auto build_left = [&] { build(left, left_free, begin, mid, centroids); };
-  auto build_right = [&] { build(right, right_free, mid, end, centroids); };
+  auto build_left = [&] { build(left, left_free, begin, mid, centred); };
+  auto build_right = [&] { build(right, right_free, mid, end, centred); };
   if (end - begin > kParallelFaces)
     tbb::parallel_invoke(build_left, build_right);
   else
@@ -132,7 +135,8 @@ void AabbTree::prepare_facing() {
     if (const double length = normal.norm(); length > 0) normals_[f] = normal / length;
   });
   cones_.assign(nodes_.size(), Cone{Eigen::Vector3d::Zero(), -1});
-  facing_.assign(static_cast<std::size_t>(n), Facing{});
+  certificates_.clear();
+  leaf_of_.assign(static_cast<std::size_t>(n), -1);
   if (order_.empty()) return;
   const int nodes = static_cast<int>(nodes_.size());
   auto set_trig = [](Cone& cone) {
@@ -145,6 +149,8 @@ void AabbTree::prepare_facing() {
     Cone& cone = cones_[i];
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (int s = node.first; s < node.first + node.count; ++s) sum += normals_[order_[s]];
+    // The widest angle from the axis is the arc cosine of the least dot product (one acos, not one a face).
+    double least_dot = 2;
     for (int s = node.first; s < node.first + node.count; ++s) {
       const Eigen::Vector3d& normal = normals_[order_[s]];
       if (normal == Eigen::Vector3d::Zero()) continue;
@@ -153,8 +159,9 @@ void AabbTree::prepare_facing() {
         break;
       }
       if (cone.half_angle < 0) cone = {sum.normalized(), 0.0};
-      cone.half_angle = std::max(cone.half_angle, angle_between(cone.axis, normal) + kAngleSlack);
+      least_dot = std::min(least_dot, cone.axis.dot(normal));
     }
+    if (least_dot <= 1) cone.half_angle = std::acos(std::clamp(least_dot, -1.0, 1.0)) + kAngleSlack;
     set_trig(cone);
   });
   // Children come after their parent: bottom up is back to front.
@@ -173,12 +180,18 @@ void AabbTree::prepare_facing() {
                                                           angle_between(cone.axis, b.axis) + b.half_angle) + kAngleSlack);
     set_trig(cone);
   }
-  tbb::parallel_for(0, nodes, [&](int i) {
-    if (nodes_[i].count > 0) set_facing(i);
+  std::vector<int> leaves;
+  for (int i = 0; i < nodes; ++i)
+    if (nodes_[i].count > 0) leaves.push_back(i);
+  certificates_.resize(leaves.size());
+  tbb::parallel_for(std::size_t{0}, leaves.size(), [&](std::size_t i) {
+    const Node& node = nodes_[leaves[i]];
+    certificates_[i] = leaf_certificate(leaves[i]);
+    for (int s = node.first; s < node.first + node.count; ++s) leaf_of_[order_[s]] = static_cast<std::int32_t>(i);
   });
 }
 
-void AabbTree::set_facing(int leaf) {
+AabbTree::Certificate AabbTree::leaf_certificate(int leaf) const {
   const Node& node = nodes_[leaf];
   const Cone& cone = cones_[leaf];
   // A normal n may skip when angle(axis, n) < pi/2 - turn, that is axis . n > sin(turn) |n|. The
@@ -186,8 +199,8 @@ void AabbTree::set_facing(int leaf) {
   // unit vector: the margin on the sine covers that (a margin on the angle would not, where the
   // sine is flat).
   const double turn = cone.half_angle + kTurn;
-  if (cone.half_angle < 0 || turn >= std::numbers::pi / 2) return;  // no skipping here
-  Facing facing;
+  Certificate facing;
+  if (cone.half_angle < 0 || turn >= std::numbers::pi / 2) return facing;  // no skipping here
   facing.axis = cone.axis.cast<float>();
   facing.min_dot = std::nextafter(static_cast<float>(std::sin(turn) + 1e-6), 2.0f);
   // The anchor: the centroid of the leaf's first face with area, in floats, so a little off the face;
@@ -206,7 +219,7 @@ void AabbTree::set_facing(int leaf) {
     if (facing.clearance > clearance) facing.clearance = std::nextafter(facing.clearance, -1.0f);
     break;
   }
-  for (int s = node.first; s < node.first + node.count; ++s) facing_[order_[s]] = facing;
+  return facing;
 }
 
 double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vector3d& axis, double angle,
@@ -250,15 +263,10 @@ double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vecto
 bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const {
   const double length = normal.norm();
   if (!(length > 0)) return false;
-  if (hint >= 0 && !facing_.empty()) {
-    // Let a be the hint leaf's anchor, e its distance off the surface, g the face nearest p. Then
-    // |p - g| <= |p - a| + e, and g comes within 2 |p - a| + e of a: inside the clearance, g turns
-    // less than cone + kTurn from the axis, so less than a right angle from `normal`.
-    const Facing& facing = facing_[hint];
-    if (facing.axis.cast<double>().dot(normal) > facing.min_dot * length &&
-        2 * (p - facing.anchor.cast<double>()).norm() < facing.clearance * (1 - 1e-9))
-      return false;
-  }
+  // Let a be the hint leaf's anchor, e its distance off the surface, g the face nearest p. Then
+  // |p - g| <= |p - a| + e, and g comes within 2 |p - a| + e of a: inside the clearance, g turns less
+  // than cone + kTurn from the axis, so less than a right angle from `normal`.
+  if (hint >= 0 && certificate(hint).settles(p, normal)) return false;
   const Hit hit = closest(p, hint);
   hint = hit.face;
   if (hit.face < 0) return false;

@@ -3,6 +3,7 @@
 #include <lodkit/mesh.h>
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <vector>
 
 namespace lodkit::detail {
@@ -28,6 +29,28 @@ class AabbTree {
   /// prepare_facing(), every call searches. Safe to call from several threads.
   bool facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const;
 
+  /// What facing_against() may conclude without a search, for the faces of one leaf: a normal n with
+  /// axis . n > min_dot |n|, asked about at a point p with 2 |p - anchor| < clearance, faces the same
+  /// way as the face nearest p. 32 bytes: a caller that asks about the same place again and again may
+  /// keep a copy beside its own data instead of looking it up each time.
+  struct Certificate {
+    Eigen::Vector3f axis = Eigen::Vector3f::Zero();
+    float min_dot = 2;  // never
+    Eigen::Vector3f anchor = Eigen::Vector3f::Zero();
+    float clearance = 0;  // from the anchor, less its distance off the surface; 0: never
+
+    /// Whether `normal` (not zero) at p surely faces the same way as the face nearest p.
+    bool settles(const Eigen::Vector3d& p, const Eigen::Vector3d& normal) const {
+      return axis.cast<double>().dot(normal) > min_dot * normal.norm() &&
+             2 * (p - anchor.cast<double>()).norm() < clearance * (1 - 1e-9);
+    }
+  };
+  /// The certificate of the leaf that holds `face` (one that never settles before prepare_facing()).
+  const Certificate& certificate(Index face) const {
+    static const Certificate never;
+    return leaf_of_.empty() ? never : certificates_[leaf_of_[face]];
+  }
+
  private:
   struct Node {
     Eigen::AlignedBox3d box;
@@ -38,29 +61,27 @@ class AabbTree {
     double half_angle;  // radians, never too small; < 0: the node has no face with area
     double cos_half = 1, sin_half = 0;  // set once every cone is known
   };
-  // Per face, its leaf's certificate for facing_against(): a normal n with axis . n > min_dot |n|,
-  // asked about at a point p with 2 |p - anchor| < clearance, needs no search. 32 bytes, read by face
-  // number: the caller's hint is usually the face it is looking at.
-  struct Facing {
-    Eigen::Vector3f axis = Eigen::Vector3f::Zero();
-    float min_dot = 2;  // never
-    Eigen::Vector3f anchor = Eigen::Vector3f::Zero();
-    float clearance = 0;  // from the anchor, less its distance off the surface; 0: never
+  struct Centred {
+    Eigen::Vector3f centre;
+    Index face;
   };
-  /// Fills in `node` over slots [begin, end); its descendants take indices from `free` on.
-  void build(int node, int free, int begin, int end, const std::vector<Eigen::Vector3d>& centroids);
+  /// Fills in `node` over slots [begin, end) of `centred` (order_ to be); its descendants take indices
+  /// from `free` on.
+  void build(int node, int free, int begin, int end, std::vector<Centred>& centred);
   /// Distance from p to the nearest face whose normal is more than `angle` from unit `axis`, or
   /// `limit` if there is none nearer.
   double distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vector3d& axis, double angle, double limit) const;
-  /// The certificate of every face in leaf node `leaf`.
-  void set_facing(int leaf);
+  /// The certificate of leaf node `leaf`.
+  Certificate leaf_certificate(int leaf) const;
   const Mesh& mesh_;
   std::vector<Node> nodes_;
   std::vector<Index> order_;
   // prepare_facing():
   std::vector<Eigen::Vector3d> normals_;  // per face, unit (zero: no area)
   std::vector<Cone> cones_;              // per node
-  std::vector<Facing> facing_;           // per face
+  // One per leaf, not per face (a 32 MB table on 1M faces).
+  std::vector<Certificate> certificates_;  // per leaf, in node order
+  std::vector<std::int32_t> leaf_of_;      // per face: its leaf's index in certificates_
 };
 
 }  // namespace lodkit::detail

@@ -106,7 +106,7 @@ class Engine {
         input_tree_ = std::make_unique<AabbTree>(mesh);
         input_tree_->prepare_facing();
         nearest_input_.resize(static_cast<std::size_t>(mesh.num_faces()));
-        std::iota(nearest_input_.begin(), nearest_input_.end(), Index{0});
+        tbb::parallel_for(Index{0}, mesh.num_faces(), [&](Index f) { nearest_input_[f] = {input_tree_->certificate(f), f}; });
         against_in_input_.assign(static_cast<std::size_t>(mesh.num_faces()), kUnknown);
       });
     setup(mesh);
@@ -160,11 +160,14 @@ class Engine {
   /// (Double-sided input, two faces back to back, has faces that face against their twin from the
   /// start; holding them would hold their whole neighbourhood.)
   bool faces_against_input(Index f, const Eigen::Vector3d* corners, const Eigen::Vector3d& n) const {
-    // Lanes query side by side, each on faces of its own region; the hint is only ever a hint.
-    std::atomic_ref<Index> last_nearest(nearest_input_[f]);
-    Index hint = last_nearest.load(std::memory_order_relaxed);
-    const bool now = input_tree_->facing_against((corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin, n, hint);
-    last_nearest.store(hint, std::memory_order_relaxed);
+    // Lanes query side by side, but each on faces of its own region (a face with a corner inside a slab
+    // lies in that slab), so no entry is written by two at once.
+    NearestInput& last = nearest_input_[f];
+    const Eigen::Vector3d centroid = (corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin;
+    if (last.certificate.settles(centroid, n)) return false;
+    Index hint = last.face;
+    const bool now = input_tree_->facing_against(centroid, n, hint);
+    if (hint != last.face) last = {input_tree_->certificate(hint), hint};
     if (!now) return false;
     // Whether input face f already faced against its nearest input face: found once per face.
     std::atomic_ref<std::int8_t> known(against_in_input_[f]);
@@ -263,7 +266,13 @@ class Engine {
   InvertedFaces inverted_mode_;
   bool check_inverted_;                   // faces facing against the input are checked (Avoid or Refuse)
   std::unique_ptr<AabbTree> input_tree_;  // the input, for the face nearest a new face (unless Allow)
-  mutable std::vector<Index> nearest_input_;  // per face, the input face last found nearest (unless Allow)
+  // Per face (unless Allow), the input face last found nearest, and a copy of its certificate: read
+  // from the tree through the face, it was a miss to memory on almost every check.
+  struct NearestInput {
+    AabbTree::Certificate certificate;
+    Index face;
+  };
+  mutable std::vector<NearestInput> nearest_input_;
   static constexpr std::int8_t kUnknown = -1;
   mutable std::vector<std::int8_t> against_in_input_;  // per face: 1 if its input self faced against the input
   /// Faces left when InvertedFaces::Avoid first let a face face against the input (wait_inverted()).
