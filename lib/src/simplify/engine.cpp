@@ -86,6 +86,7 @@ struct Lane {
   std::vector<HeapEntry> rated;              ///< see Engine::rate_edges()
   std::vector<Candidate> rated_candidates;  ///< with rated, when scores are remembered
   std::vector<std::pair<Index, Index>> ring_edges, rescore;
+  std::vector<std::pair<Index, Index>> unsettled;  ///< see Engine::geometry()
   /// InvertedFaces::Avoid: entries (u, v, version) queued again to wait (see kInvertedWait); when one
   /// comes back unchanged, it is let be.
   std::set<std::tuple<Index, Index, std::uint32_t>> waited;
@@ -146,7 +147,7 @@ class Engine {
   Rejection map_wedges(Index u, Index v, Probe& probe) const;
   Index wedge_at(Index f, Index p) const;
   /// With `inverted_ok`, faces facing against the input are let be (a waited entry; see kInvertedWait).
-  Rejection geometry(Index u, Index v, const Eigen::Vector3d& p, bool inverted_ok = false);
+  Rejection geometry(Lane& lane, Index u, Index v, const Eigen::Vector3d& p, bool inverted_ok = false);
   /// The top entry e, refused under InvertedFaces::Avoid for faces facing against the input: the first
   /// time, queued again to wait (true); when it comes back unchanged, let be (false, and `verdict` says
   /// whether the other checks pass).
@@ -656,12 +657,22 @@ Rejection Engine::structure(Index u, Index v, Freedom& freedom, Lane* link, Prob
   return Rejection::None;
 }
 
-Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p, bool inverted_ok) {
+Rejection Engine::geometry(Lane& lane, Index u, Index v, const Eigen::Vector3d& p, bool inverted_ok) {
   if (!o_.preserve_topology) return Rejection::None;
   constexpr double kQualityScale = 6.928203230275509;  // 4 sqrt(3): equilateral = 1
-  // Two passes: the local checks on every changed face first, so that a candidate they reject never
-  // pays for the nearest-input-face queries of the second.
-  auto check = [&](Index moved, Index other, bool against_input) {
+  const bool against_input = check_inverted_ && !inverted_ok;
+  // The local checks on every changed face first, with each face's certificate against the input; the
+  // nearest-input-face searches, where a certificate does not settle it, only once every local check
+  // passed, so that a candidate they reject never pays for one.
+  std::vector<std::pair<Index, Index>>& unsettled = lane.unsettled;  // (face, its moved corner)
+  unsettled.clear();
+  auto corners_after = [&](Index f, Index moved, Eigen::Vector3d* after) {
+    for (int k = 0; k < 3; ++k) {
+      const Index q = s_.corner_point(f, k);
+      after[k] = q == moved ? p : s_.position[q];
+    }
+  };
+  auto check = [&](Index moved, Index other) {
     for (Index f : s_.faces_of(moved)) {
       Eigen::Vector3d before[3], after[3];
       bool has_other = false;
@@ -672,12 +683,8 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p, bool inve
         if (q == moved) after[k] = p;
       }
       if (has_other) continue;  // vanishes
-      const Eigen::Vector3d n1 = (after[1] - after[0]).cross(after[2] - after[0]);
-      if (against_input) {
-        if (faces_against_input(f, after, n1)) return Rejection::Inverted;
-        continue;
-      }
       const Eigen::Vector3d n0 = (before[1] - before[0]).cross(before[2] - before[0]);
+      const Eigen::Vector3d n1 = (after[1] - after[0]).cross(after[2] - after[0]);
       const double l0 = n0.norm(), l1 = n1.norm();
       if (!(l1 > 0)) return Rejection::Sliver;
       // Against the face's last shape, and against its input shape (by a limit of its own): small turns
@@ -690,15 +697,18 @@ Rejection Engine::geometry(Index u, Index v, const Eigen::Vector3d& p, bool inve
       };
       const double q1 = quality(after, l1);
       if (q1 < o_.min_triangle_quality && q1 < quality(before, l0)) return Rejection::Sliver;
+      if (against_input && !nearest_input_[f].certificate.settles((after[0] + after[1] + after[2]) / 3.0 + s_.origin, n1))
+        unsettled.push_back({f, moved});
     }
     return Rejection::None;
   };
-  const bool v_moves = p != s_.position[v];
-  for (const bool against_input : {false, true}) {
-    if (against_input && (!check_inverted_ || inverted_ok)) break;
-    if (const Rejection r = check(u, v, against_input); r != Rejection::None) return r;
-    if (v_moves)
-      if (const Rejection r = check(v, u, against_input); r != Rejection::None) return r;
+  if (const Rejection r = check(u, v); r != Rejection::None) return r;
+  if (p != s_.position[v])
+    if (const Rejection r = check(v, u); r != Rejection::None) return r;
+  for (const auto& [f, moved] : unsettled) {
+    Eigen::Vector3d after[3];
+    corners_after(f, moved, after);
+    if (faces_against_input(f, after, (after[1] - after[0]).cross(after[2] - after[0]))) return Rejection::Inverted;
   }
   return Rejection::None;
 }
@@ -710,7 +720,7 @@ Rejection Engine::evaluate(Lane& lane, Index u, Index v, Candidate& c, bool full
   if (const Rejection r = structure(u, v, freedom, full ? &lane : nullptr, lane.probe); r != Rejection::None) return r;
   if (!scored && !cost_->score(s_, lane.probe, u, v, freedom, c)) return Rejection::Cost;
   if (o_.max_error && c.error > *o_.max_error) return Rejection::ErrorLimit;
-  return full ? geometry(u, v, c.position) : Rejection::None;
+  return full ? geometry(lane, u, v, c.position) : Rejection::None;
 }
 
 void Engine::remember(const HeapEntry& e, const Candidate& c) {
@@ -1131,7 +1141,7 @@ bool Engine::wait_inverted(Lane& lane, const HeapEntry& e, const Candidate& c, R
 }
 
 Rejection Engine::let_inverted_be(Lane& lane, Index u, Index v, const Eigen::Vector3d& p) {
-  const Rejection verdict = geometry(u, v, p, true);
+  const Rejection verdict = geometry(lane, u, v, p, true);
   if (verdict != Rejection::None) return verdict;
   lane.let_inverted = true;
   // Lanes run side by side with no common count: theirs is where their pass began (see lane_pass()).
