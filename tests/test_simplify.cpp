@@ -742,8 +742,11 @@ TEST(Simplify, AvoidingOrRefusingInvertedFacesLeavesNoneOnAThinLens) {
   const Mesh lens = test::thin_lens();
   SimplifyOptions o;
   o.target_ratio = 0.03;
+  o.inverted_faces = InvertedFaces::Allow;
   const SimplifyResult plain = simplify(lens, o);
   ASSERT_GT(count_flipped_faces(lens, plain.mesh), 0) << "the lens no longer shows the failure this test guards";
+  o.inverted_faces.reset();  // quadric's default
+  EXPECT_EQ(count_flipped_faces(lens, simplify(lens, o).mesh), 0);
   for (const InvertedFaces mode : {InvertedFaces::Avoid, InvertedFaces::Refuse})
     for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe}) {
       SCOPED_TRACE(to_string(method) + " " + to_string(mode));

@@ -313,7 +313,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--inverted-faces", opt->inverted_faces,
                   "Collapses that leave a face facing against the nearest input face: allow (no check), avoid (such a "
                   "collapse waits until the others cost four times as much), refuse (never; may stop short of the target, and says so). Default: "
-                  "allow")
+                  "avoid for quadric, allow for hoppe and edge-length")
       ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
   sub->add_flag("--no-inverted-faces", opt->no_inverted_faces, "The same as --inverted-faces refuse")
       ->excludes("--inverted-faces");

@@ -1375,7 +1375,9 @@ Index default_lane_faces(SimplifyMethod method) { return method == SimplifyMetho
 
 Index default_max_valence(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 24 : 0; }
 
-InvertedFaces default_inverted_faces(SimplifyMethod) { return InvertedFaces::Allow; }
+InvertedFaces default_inverted_faces(SimplifyMethod method) {
+  return method == SimplifyMethod::Quadric ? InvertedFaces::Avoid : InvertedFaces::Allow;
+}
 
 double default_max_total_normal_change(SimplifyMethod method) { return method == SimplifyMethod::Quadric ? 90.0 : 60.0; }
 
