@@ -189,6 +189,7 @@ void AabbTree::prepare_facing() {
     certificates_[i] = leaf_certificate(leaves[i]);
     for (int s = node.first; s < node.first + node.count; ++s) leaf_of_[order_[s]] = static_cast<std::int32_t>(i);
   });
+  std::vector<Cone>().swap(cones_);  // only finding the certificates needs them (25 MB on 1M faces)
 }
 
 AabbTree::Certificate AabbTree::leaf_certificate(int leaf) const {
@@ -199,10 +200,10 @@ AabbTree::Certificate AabbTree::leaf_certificate(int leaf) const {
   // unit vector: the margin on the sine covers that (a margin on the angle would not, where the
   // sine is flat).
   const double turn = cone.half_angle + kTurn;
-  Certificate facing;
-  if (cone.half_angle < 0 || turn >= std::numbers::pi / 2) return facing;  // no skipping here
-  facing.axis = cone.axis.cast<float>();
-  facing.min_dot = std::nextafter(static_cast<float>(std::sin(turn) + 1e-6), 2.0f);
+  Certificate out;
+  if (cone.half_angle < 0 || turn >= std::numbers::pi / 2) return out;  // no skipping here
+  out.axis = cone.axis.cast<float>();
+  out.min_dot = std::nextafter(static_cast<float>(std::sin(turn) + 1e-6), 2.0f);
   // The anchor: the centroid of the leaf's first face with area, in floats, so a little off the face;
   // the clearance is measured from it, less that little.
   for (int s = node.first; s < node.first + node.count; ++s) {
@@ -210,16 +211,16 @@ AabbTree::Certificate AabbTree::leaf_certificate(int leaf) const {
     if (normals_[f] == Eigen::Vector3d::Zero()) continue;
     const Eigen::Vector3d a = mesh_.positions.row(mesh_.triangles(f, 0)), b = mesh_.positions.row(mesh_.triangles(f, 1)),
                           c = mesh_.positions.row(mesh_.triangles(f, 2));
-    facing.anchor = ((a + b + c) / 3.0).cast<float>();
-    const Eigen::Vector3d anchor = facing.anchor.cast<double>();
+    out.anchor = ((a + b + c) / 3.0).cast<float>();
+    const Eigen::Vector3d anchor = out.anchor.cast<double>();
     const double off_surface = (closest_point_on_triangle(anchor, a, b, c) - anchor).norm();
     const double reach = kReach * 0.5 * node.box.diagonal().norm();
     const double clearance = distance_to_turned(anchor, cone.axis, cone.half_angle + kTurn, reach) - off_surface;
-    facing.clearance = static_cast<float>(clearance);
-    if (facing.clearance > clearance) facing.clearance = std::nextafter(facing.clearance, -1.0f);
+    out.clearance = static_cast<float>(clearance);
+    if (out.clearance > clearance) out.clearance = std::nextafter(out.clearance, -1.0f);
     break;
   }
-  return facing;
+  return out;
 }
 
 double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vector3d& axis, double angle,

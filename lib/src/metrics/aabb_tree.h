@@ -78,7 +78,7 @@ class AabbTree {
   std::vector<Index> order_;
   // prepare_facing():
   std::vector<Eigen::Vector3d> normals_;  // per face, unit (zero: no area)
-  std::vector<Cone> cones_;              // per node
+  std::vector<Cone> cones_;              // per node, while the certificates are found
   // One per leaf, not per face (a 32 MB table on 1M faces).
   std::vector<Certificate> certificates_;  // per leaf, in node order
   std::vector<std::int32_t> leaf_of_;      // per face: its leaf's index in certificates_
