@@ -5,6 +5,7 @@
 #include <lodkit/metrics.h>
 
 #include <cmath>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sys/wait.h>
@@ -480,6 +481,31 @@ TEST(CliPm, FlatShadedInputNamesAndTakesDropNormals) {
   EXPECT_EQ(top.num_faces(), 1280);
   EXPECT_EQ(top.num_vertices(), 642);  // welded: the normals were what split the corners
   EXPECT_FALSE(top.has_normals());
+}
+
+// pm build takes simplify's --inverted-faces: by default quadric's levels avoid faces facing against the
+// input (none at 3 % of a thin lens), with allow some level has them, and its levels stay simplify's.
+TEST(CliPm, BuildTakesInvertedFacesAsSimplifyDoes) {
+  test::ScratchDir dir("cli-pm-inverted");
+  const Mesh lens = test::thin_lens();
+  write_mesh(lens, (dir / "lens.ply").string());
+  const Index faces = static_cast<Index>(std::llround(0.03 * lens.num_faces()));
+  auto level = [&](const std::string& extra) {
+    const CliRun r = run(dir, "pm build lens.ply -o lens.pm " + extra);
+    EXPECT_EQ(r.status, 0) << r.err;
+    const CliRun x = run(dir, fmt::format("pm extract lens.pm -o level.ply --faces {}", faces));
+    EXPECT_EQ(x.status, 0) << x.err;
+    return read_mesh(dir / "level.ply");
+  };
+  EXPECT_EQ(count_flipped_faces(lens, level("")), 0);
+  const Mesh allowed = level("--inverted-faces allow");
+  EXPECT_GT(count_flipped_faces(lens, allowed), 0);
+  ASSERT_EQ(run(dir, fmt::format("simplify lens.ply -o s.ply --faces {} --inverted-faces allow", faces)).status, 0);
+  EXPECT_EQ(allowed.num_faces(), read_mesh(dir / "s.ply").num_faces());
+  const CliRun bad = run(dir, "pm build lens.ply -o bad.pm --inverted-faces sometimes");
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.err.find("--inverted-faces"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.pm"));
 }
 
 TEST(CliPm, BadStreamsAndOptionsFailClearly) {

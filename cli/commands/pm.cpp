@@ -25,6 +25,7 @@ struct PmCliOptions {
   bool draco = false, keep_order = false, json = false, measure = false, drop_normals = false;
   Index block = 1024;
   std::vector<double> attribute_weights;
+  std::optional<std::string> inverted_faces;  // allow|avoid|refuse; unset: by method, as simplify
   // extract / geomorph
   std::optional<Index> faces, from, to;
   std::optional<double> ratio, pixel_error, alpha, max_error;
@@ -42,6 +43,7 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   refuse_to_overwrite(o.output, o.input);
   ProgressiveOptions p;
   p.simplify.method = *parse_method(o.method);
+  if (o.inverted_faces) p.simplify.inverted_faces = parse_inverted_faces(*o.inverted_faces);
   p.base_faces = o.base_faces;
   if (!o.attribute_weights.empty()) {
     if (o.attribute_weights.size() != 3) throw Error("pm build: --attribute-weights takes three numbers: normals,uvs,colours");
@@ -289,6 +291,10 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::IsMember({"quadric", "hoppe", "edge-length"}))->capture_default_str();
   build->add_option("--base-faces", opt->base_faces, "Stop collapsing at this many faces (default: as far as legal)")
       ->check(kNonNegative);
+  build->add_option("--inverted-faces", opt->inverted_faces,
+                    "Collapses that leave a face facing against the nearest input face, as in simplify: allow, avoid or "
+                    "refuse (default: avoid for quadric, allow for hoppe and edge-length)")
+      ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
   build->add_option("--quantize", opt->quantize, "Position bits (quantised, compact stream); 0 = lossless")
       ->check(in_range(0, 30))->capture_default_str();
   build->add_flag("--draco", opt->draco, "Compress the base mesh with Draco (needs --quantize)");
