@@ -267,7 +267,18 @@ bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& n
   // Let a be the hint leaf's anchor, e its distance off the surface, g the face nearest p. Then
   // |p - g| <= |p - a| + e, and g comes within 2 |p - a| + e of a: inside the clearance, g turns less
   // than cone + kTurn from the axis, so less than a right angle from `normal`.
-  if (hint >= 0 && certificate(hint).settles(p, normal)) return false;
+  if (hint >= 0) {
+    const Certificate& c = certificate(hint);
+    if (c.settles(p, normal)) return false;
+    // The hint face's own distance is a bound on the nearest face's: where p lies nearer the surface
+    // than the anchor, it reaches further (a large face's centroid far from its leaf's anchor).
+    if (c.turns_little(normal)) {
+      const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(hint, 0)),
+                                                          mesh_.positions.row(mesh_.triangles(hint, 1)),
+                                                          mesh_.positions.row(mesh_.triangles(hint, 2)));
+      if (c.settles_within(p, normal, (q - p).norm())) return false;
+    }
+  }
   const Hit hit = closest(p, hint);
   hint = hit.face;
   if (hit.face < 0) return false;

@@ -41,8 +41,15 @@ class AabbTree {
 
     /// Whether `normal` (not zero) at p surely faces the same way as the face nearest p.
     bool settles(const Eigen::Vector3d& p, const Eigen::Vector3d& normal) const {
-      return axis.cast<double>().dot(normal) > min_dot * normal.norm() &&
-             2 * (p - anchor.cast<double>()).norm() < clearance * (1 - 1e-9);
+      return turns_little(normal) && 2 * (p - anchor.cast<double>()).norm() < clearance * (1 - 1e-9);
+    }
+    /// The same, knowing that some input face lies within `distance` of p: the nearest one then lies
+    /// within |p - anchor| + distance of the anchor (the bound settles() uses is 2 |p - anchor|).
+    bool settles_within(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, double distance) const {
+      return turns_little(normal) && (p - anchor.cast<double>()).norm() + distance < clearance * (1 - 1e-9);
+    }
+    bool turns_little(const Eigen::Vector3d& normal) const {
+      return axis.cast<double>().dot(normal) > min_dot * normal.norm();
     }
   };
   /// The certificate of the leaf that holds `face` (one that never settles before prepare_facing()).
