@@ -157,7 +157,8 @@ class Engine {
   Rejection let_inverted_be(Lane& lane, Index u, Index v, const Eigen::Vector3d& p);
   /// Whether face f, with corners `corners` and normal n, faces against the input face nearest its
   /// centroid (as count_flipped_faces() sees it), where in the input it did not. The search starts at
-  /// the input face found nearest f last time (at first f itself: face f is input face f).
+  /// the input face found nearest f last time (at first f itself: face f is input face f). For faces
+  /// whose kept certificate did not settle it (geometry() tests that first).
   /// (Double-sided input, two faces back to back, has faces that face against their twin from the
   /// start; holding them would hold their whole neighbourhood.)
   bool faces_against_input(Index f, const Eigen::Vector3d* corners, const Eigen::Vector3d& n) const {
@@ -165,7 +166,6 @@ class Engine {
     // lies in that slab), so no entry is written by two at once.
     NearestInput& last = nearest_input_[f];
     const Eigen::Vector3d centroid = (corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin;
-    if (last.certificate.settles(centroid, n)) return false;
     Index hint = last.face;
     const bool now = input_tree_->facing_against(centroid, n, hint);
     if (hint != last.face) last = {input_tree_->certificate(hint), hint};
