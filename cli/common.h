@@ -70,4 +70,8 @@ nlohmann::json to_json(const MeshReport& report);
 /// CLI11 validator for names of mesh formats.
 CLI::Validator format_validator();
 
+/// `--inverted-faces allow|avoid|refuse` (SimplifyOptions::inverted_faces; unset: by method), as simplify
+/// and pm build take it.
+CLI::Option* add_inverted_faces_option(CLI::App* app, std::optional<std::string>& mode);
+
 }  // namespace lodkit::cli

@@ -291,10 +291,7 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::IsMember({"quadric", "hoppe", "edge-length"}))->capture_default_str();
   build->add_option("--base-faces", opt->base_faces, "Stop collapsing at this many faces (default: as far as legal)")
       ->check(kNonNegative);
-  build->add_option("--inverted-faces", opt->inverted_faces,
-                    "Collapses that leave a face facing against the nearest input face, as in simplify: allow, avoid or "
-                    "refuse (default: avoid for quadric, allow for hoppe and edge-length)")
-      ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
+  add_inverted_faces_option(build, opt->inverted_faces);
   build->add_option("--quantize", opt->quantize, "Position bits (quantised, compact stream); 0 = lossless")
       ->check(in_range(0, 30))->capture_default_str();
   build->add_flag("--draco", opt->draco, "Compress the base mesh with Draco (needs --quantize)");

@@ -310,11 +310,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(kNonNegative);
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
-  sub->add_option("--inverted-faces", opt->inverted_faces,
-                  "Collapses that leave a face facing against the nearest input face: allow (no check), avoid (such a "
-                  "collapse waits until the others cost four times as much), refuse (never; may stop short of the target, and says so). Default: "
-                  "avoid for quadric, allow for hoppe and edge-length")
-      ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
+  add_inverted_faces_option(sub, opt->inverted_faces);
   sub->add_flag("--no-inverted-faces", opt->no_inverted_faces, "The same as --inverted-faces refuse")
       ->excludes("--inverted-faces");
   sub->add_flag("--measure", opt->measure, "Measure Hausdorff and RMS distance to the input (lodkit compare)");
