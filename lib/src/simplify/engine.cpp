@@ -70,6 +70,13 @@ struct CheaperFirst {
 
 // One priority queue and the scratch of the loop that drains it. A run has one lane; on large meshes,
 // several first simplify the insides of slabs of the mesh side by side (Engine::run_lanes).
+/// A face a collapse would move, whose kept certificate against the input did not settle it: where it
+/// would go (Engine::geometry()).
+struct UnsettledFace {
+  Index face;
+  Eigen::Vector3d centroid, normal;
+};
+
 struct Lane {
   BatchQueue<HeapEntry, CheaperFirst> queue;
   // Entries a collapse made stale, roughly (the edges at its two ends). Nine in ten pops used to be
@@ -86,7 +93,7 @@ struct Lane {
   std::vector<HeapEntry> rated;              ///< see Engine::rate_edges()
   std::vector<Candidate> rated_candidates;  ///< with rated, when scores are remembered
   std::vector<std::pair<Index, Index>> ring_edges, rescore;
-  std::vector<std::pair<Index, Index>> unsettled;  ///< see Engine::geometry()
+  std::vector<UnsettledFace> unsettled;  ///< see Engine::geometry()
   /// InvertedFaces::Avoid: entries (u, v, version) queued again to wait (see kInvertedWait); when one
   /// comes back unchanged, it is let be.
   std::set<std::tuple<Index, Index, std::uint32_t>> waited;
@@ -155,17 +162,17 @@ class Engine {
   /// Collapse u -> v to p, refused only for faces facing against the input, let be after all: the
   /// other checks' verdict, and where the run did so when it did.
   Rejection let_inverted_be(Lane& lane, Index u, Index v, const Eigen::Vector3d& p);
-  /// Whether face f, with corners `corners` and normal n, faces against the input face nearest its
-  /// centroid (as count_flipped_faces() sees it), where in the input it did not. The search starts at
-  /// the input face found nearest f last time (at first f itself: face f is input face f). For faces
-  /// whose kept certificate did not settle it (geometry() tests that first).
+  /// Whether face f, with centroid `centroid` (absolute, not relative to the origin) and normal n,
+  /// faces against the input face nearest its centroid (as count_flipped_faces() sees it), where in the
+  /// input it did not. The search starts at the input face found nearest f last time (at first f
+  /// itself: face f is input face f). For faces whose kept certificate did not settle it (geometry()
+  /// tests that first).
   /// (Double-sided input, two faces back to back, has faces that face against their twin from the
   /// start; holding them would hold their whole neighbourhood.)
-  bool faces_against_input(Index f, const Eigen::Vector3d* corners, const Eigen::Vector3d& n) const {
+  bool faces_against_input(Index f, const Eigen::Vector3d& centroid, const Eigen::Vector3d& n) const {
     // Lanes query side by side, but each on faces of its own region (a face with a corner inside a slab
     // lies in that slab), so no entry is written by two at once.
     NearestInput& last = nearest_input_[f];
-    const Eigen::Vector3d centroid = (corners[0] + corners[1] + corners[2]) / 3.0 + s_.origin;
     Index hint = last.face;
     const bool now = input_tree_->facing_against(centroid, n, hint);
     if (hint != last.face) last = {input_tree_->certificate(hint), hint};
@@ -664,14 +671,8 @@ Rejection Engine::geometry(Lane& lane, Index u, Index v, const Eigen::Vector3d& 
   // The local checks on every changed face first, with each face's certificate against the input; the
   // nearest-input-face searches, where a certificate does not settle it, only once every local check
   // passed, so that a candidate they reject never pays for one.
-  std::vector<std::pair<Index, Index>>& unsettled = lane.unsettled;  // (face, its moved corner)
+  std::vector<UnsettledFace>& unsettled = lane.unsettled;
   unsettled.clear();
-  auto corners_after = [&](Index f, Index moved, Eigen::Vector3d* after) {
-    for (int k = 0; k < 3; ++k) {
-      const Index q = s_.corner_point(f, k);
-      after[k] = q == moved ? p : s_.position[q];
-    }
-  };
   auto check = [&](Index moved, Index other) {
     for (Index f : s_.faces_of(moved)) {
       Eigen::Vector3d before[3], after[3];
@@ -697,19 +698,18 @@ Rejection Engine::geometry(Lane& lane, Index u, Index v, const Eigen::Vector3d& 
       };
       const double q1 = quality(after, l1);
       if (q1 < o_.min_triangle_quality && q1 < quality(before, l0)) return Rejection::Sliver;
-      if (against_input && !nearest_input_[f].certificate.settles((after[0] + after[1] + after[2]) / 3.0 + s_.origin, n1))
-        unsettled.push_back({f, moved});
+      if (against_input) {
+        const Eigen::Vector3d centroid = (after[0] + after[1] + after[2]) / 3.0 + s_.origin;
+        if (!nearest_input_[f].certificate.settles(centroid, n1)) unsettled.push_back({f, centroid, n1});
+      }
     }
     return Rejection::None;
   };
   if (const Rejection r = check(u, v); r != Rejection::None) return r;
   if (p != s_.position[v])
     if (const Rejection r = check(v, u); r != Rejection::None) return r;
-  for (const auto& [f, moved] : unsettled) {
-    Eigen::Vector3d after[3];
-    corners_after(f, moved, after);
-    if (faces_against_input(f, after, (after[1] - after[0]).cross(after[2] - after[0]))) return Rejection::Inverted;
-  }
+  for (const UnsettledFace& u : unsettled)
+    if (faces_against_input(u.face, u.centroid, u.normal)) return Rejection::Inverted;
   return Rejection::None;
 }
 
