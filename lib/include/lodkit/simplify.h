@@ -1,7 +1,7 @@
 #pragma once
 // simplify(): edge-collapse simplification with a choice of cost.
 //
-// One engine (lib/src/simplify/engine.cpp) keeps a priority queue of candidate collapses u -> v
+// One engine (lib/src/simplify/collapse_engine.h) keeps a priority queue of candidate collapses u -> v
 // over vertices welded by position. Each candidate is checked once when scored and again when it is
 // taken: the link condition (the result stays a 2-manifold with the same genus, components and
 // boundary loops), no face normal turning by more than `max_normal_change_deg`, no new sliver below

@@ -1,0 +1,111 @@
+// simplify(): the options checked, the target found, the engine run; and the methods' defaults and names.
+#include <lodkit/error.h>
+#include <lodkit/simplify.h>
+
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+
+#include "core/geometry.h"
+#include "simplify/collapse_engine.h"
+
+namespace lodkit {
+
+SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(mesh, "simplify");
+  if (options.target_ratio && !(*options.target_ratio >= 0 && *options.target_ratio <= 1))
+    throw Error(fmt::format("simplify: ratio must be between 0 and 1, got {}", *options.target_ratio));
+  if (options.target_faces && *options.target_faces < 0)
+    throw Error(fmt::format("simplify: face target must not be negative, got {}", *options.target_faces));
+  if (options.max_error && !(*options.max_error >= 0))
+    throw Error(fmt::format("simplify: max error must not be negative, got {}", *options.max_error));
+  if (!(options.max_normal_change_deg > 0 && options.max_normal_change_deg <= 180))
+    throw Error("simplify: max normal change must be in (0, 180] degrees");
+  if (options.max_total_normal_change_deg &&
+      !(*options.max_total_normal_change_deg > 0 && *options.max_total_normal_change_deg <= 180))
+    throw Error(fmt::format("simplify: max total normal change must be in (0, 180] degrees, got {}",
+                            *options.max_total_normal_change_deg));
+  if (options.lane_faces && *options.lane_faces < 0)
+    throw Error(fmt::format("simplify: faces per lane must not be negative, got {}", *options.lane_faces));
+  if (options.max_valence && *options.max_valence < 0)
+    throw Error(fmt::format("simplify: the valence limit must not be negative, got {}", *options.max_valence));
+  if (!(options.hoppe_points_per_face >= 0 && options.hoppe_points_per_face <= 1000))
+    throw Error(fmt::format("simplify: hoppe's random points per face must be between 0 and 1000, got {}",
+                            options.hoppe_points_per_face));
+  if (!(options.hoppe_points_on_every_face >= 0 && options.hoppe_points_on_every_face <= 1000))
+    throw Error(fmt::format("simplify: hoppe's random points on every face must be between 0 and 1000, got {}",
+                            options.hoppe_points_on_every_face));
+  if (options.hoppe_min_points < 0)
+    throw Error(fmt::format("simplify: hoppe's minimum sample points must not be negative, got {}", options.hoppe_min_points));
+  if (!(options.hoppe_crease_angle_deg >= 0 && options.hoppe_crease_angle_deg <= 180))
+    throw Error(fmt::format("simplify: hoppe's crease angle must be between 0 and 180 degrees, got {}",
+                            options.hoppe_crease_angle_deg));
+  Index target = 0;
+  if (!options.target_faces && !options.target_ratio && !options.max_error) target = mesh.num_faces() / 2;
+  if (options.target_faces) target = std::max(target, *options.target_faces);
+  if (options.target_ratio)
+    target = std::max(target, static_cast<Index>(std::llround(*options.target_ratio * mesh.num_faces())));
+  if (options.recompute_normals && options.record_collapses)
+    throw Error("simplify: recompute_normals cannot be combined with record_collapses");
+  SimplifyResult r;
+  if (options.recompute_normals && mesh.has_normals()) {
+    // A copy without normals: the engine welds vertices that differed only by them.
+    Mesh positions_only = mesh;
+    positions_only.attributes.normals.resize(0, 3);
+    r = detail::Engine(positions_only, options).run(target);
+  } else {
+    r = detail::Engine(mesh, options).run(target);
+  }
+  if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+int attribute_values_per_vertex(const Mesh& mesh) {
+  return 3 * mesh.has_normals() + 2 * mesh.has_uvs() + 4 * mesh.has_colours();
+}
+
+Index default_lane_faces(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 8000 : 125000; }
+
+Index default_max_valence(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 24 : 0; }
+
+InvertedFaces default_inverted_faces(SimplifyMethod method) {
+  return method == SimplifyMethod::Quadric ? InvertedFaces::Avoid : InvertedFaces::Allow;
+}
+
+double default_max_total_normal_change(SimplifyMethod method) { return method == SimplifyMethod::Quadric ? 90.0 : 60.0; }
+
+std::string to_string(SimplifyMethod method) {
+  switch (method) {
+    case SimplifyMethod::Quadric: return "quadric";
+    case SimplifyMethod::Hoppe: return "hoppe";
+    case SimplifyMethod::EdgeLength: return "edge-length";
+  }
+  return "?";
+}
+
+std::optional<SimplifyMethod> parse_method(const std::string& name) {
+  if (name == "quadric") return SimplifyMethod::Quadric;
+  if (name == "hoppe") return SimplifyMethod::Hoppe;
+  if (name == "edge-length") return SimplifyMethod::EdgeLength;
+  return std::nullopt;
+}
+
+std::string to_string(InvertedFaces mode) {
+  switch (mode) {
+    case InvertedFaces::Allow: return "allow";
+    case InvertedFaces::Avoid: return "avoid";
+    case InvertedFaces::Refuse: return "refuse";
+  }
+  return "?";
+}
+
+std::optional<InvertedFaces> parse_inverted_faces(const std::string& name) {
+  for (const InvertedFaces mode : {InvertedFaces::Allow, InvertedFaces::Avoid, InvertedFaces::Refuse})
+    if (name == to_string(mode)) return mode;
+  return std::nullopt;
+}
+
+}  // namespace lodkit
+
