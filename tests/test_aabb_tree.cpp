@@ -103,6 +103,41 @@ TEST(AabbTree, FacingAgainstMatchesBruteForceOnTwoCloseSheets) {
   EXPECT_LT(against, total - total / 20);
 }
 
+// Where the search cannot pass over a node for its side: two tori that cross each other (faces of
+// one inside the other, as in a scan of crossing parts) and a box's 90-degree edges, whose nodes hold
+// faces that face both ways. The answer must still be that of the nearest face, ties to the lowest
+// number, whether the first search settles it or the second has to look for a nearer face.
+TEST(AabbTree, FacingAgainstMatchesBruteForceOnCrossingPartsAndSharpEdges) {
+  TorusOptions torus_options;
+  torus_options.major_segments = 24, torus_options.minor_segments = 12;
+  Mesh crossed = make_torus(torus_options);
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(1.5707963267948966, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  crossed.positions = (crossed.positions * turn.transpose()).rowwise() + Eigen::RowVector3d(1.0, 0.0, 0.0);
+  BoxOptions box_options;
+  box_options.divisions = 6;
+  for (const Mesh& m : {concatenated(make_torus(torus_options), crossed), make_box(box_options)}) {
+    AabbTree tree(m);
+    tree.prepare_facing();
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<Index> face(0, m.num_faces() - 1);
+    int against = 0, total = 0;
+    for (const double offset : {0.0, 0.05, 0.4}) {
+      for (const Probe& probe : probes_near(m, 800, offset, 23 + static_cast<unsigned>(offset * 100))) {
+        const bool expected = brute_facing_against(m, probe.point, probe.normal);
+        for (Index hint : {Index{-1}, probe.source, face(rng)}) {
+          ASSERT_EQ(tree.facing_against(probe.point, probe.normal, hint), expected)
+              << "point " << probe.point.transpose() << " normal " << probe.normal.transpose();
+          ASSERT_GE(hint, 0);
+        }
+        against += expected;
+        ++total;
+      }
+    }
+    EXPECT_GT(against, total / 20);
+    EXPECT_LT(against, total - total / 20);
+  }
+}
+
 TEST(AabbTree, FacingAgainstHandlesFacesWithoutAreaAndFacesBackToBackPreparedOrNot) {
   // A square twice, once each way (back to back), and a face of no area beside them.
   Mesh m;

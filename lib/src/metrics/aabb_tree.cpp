@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <tbb/parallel_for.h>
@@ -23,6 +24,7 @@ constexpr double kTurn = std::numbers::pi / 4;
 constexpr double kReach = 6;
 constexpr double kAngleSlack = 1e-7;   // radians: acos and the sums of angles round
 constexpr double kCosineSlack = 1e-9;  // and cosines
+constexpr double kSideSlack = 1e-6;    // the sines of the side tests, whose axes are floats
 
 double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {  // unit vectors
   return std::acos(std::clamp(a.dot(b), -1.0, 1.0));
@@ -102,11 +104,14 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
   if (hint >= 0) test_face(hint);
   if (nodes_.empty() || order_.empty()) return best;
   int stack[128];
+  double stack_distance[128];
   int top = 0;
+  stack_distance[top] = box_squared_distance(nodes_[0].box, p);
   stack[top++] = 0;
   while (top > 0) {
-    const Node& node = nodes_[stack[--top]];
-    if (box_squared_distance(node.box, p) > best.squared_distance) continue;
+    --top;
+    if (stack_distance[top] > best.squared_distance) continue;
+    const Node& node = nodes_[stack[top]];
     if (node.count > 0) {
       for (int i = node.first; i < node.first + node.count; ++i) test_face(order_[i]);
       continue;
@@ -115,11 +120,11 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
     const int a = node.first, b = node.first + 1;
     const double da = box_squared_distance(nodes_[a].box, p), db = box_squared_distance(nodes_[b].box, p);
     if (da < db) {
-      stack[top++] = b;
-      stack[top++] = a;
+      stack_distance[top] = db, stack[top++] = b;
+      stack_distance[top] = da, stack[top++] = a;
     } else {
-      stack[top++] = a;
-      stack[top++] = b;
+      stack_distance[top] = da, stack[top++] = a;
+      stack_distance[top] = db, stack[top++] = b;
     }
   }
   return best;
@@ -189,7 +194,98 @@ void AabbTree::prepare_facing() {
     certificates_[i] = leaf_certificate(leaves[i]);
     for (int s = node.first; s < node.first + node.count; ++s) leaf_of_[order_[s]] = static_cast<std::int32_t>(i);
   });
+  // The side tests, from the cones, rounded outwards.
+  sides_.assign(nodes_.size(), SideTest{});
+  tbb::parallel_for(0, nodes, [&](int i) {
+    const Cone& cone = cones_[i];
+    SideTest& side = sides_[i];
+    if (cone.half_angle < 0) side.sine = -2;  // no face with area: each faces neither way
+    if (cone.half_angle < 0 || cone.half_angle >= std::numbers::pi / 2) return;
+    side.axis = cone.axis.cast<float>();
+    side.sine = std::nextafter(static_cast<float>(cone.sin_half + kSideSlack), 2.0f);
+  });
   std::vector<Cone>().swap(cones_);  // only finding the certificates needs them (25 MB on 1M faces)
+}
+
+// The face closest(p) finds is the first by (distance, index). Its side is found in up to two searches:
+// 1. The nearest face B, passing over nodes whose faces all face the same way as `normal` (most of what
+//    lies near p, by their cones: a face turns at most the half angle h from the axis a, so less than a
+//    right angle from n when a . n > sin h). If B faces the same way, so does the nearest face: were
+//    the nearest face N against, no node holding N could be passed over for its side, nor for its
+//    distance, which is at most B's, and the search would have found N. B is the next hint.
+// 2. If B faces against, it is nearer than every face this search tested, so only a face in a node it
+//    passed over can come first; all of those face the same way. They are searched, stopping at the
+//    first found before B.
+bool AabbTree::nearest_faces_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal,
+                                     const Eigen::Vector3d& unit, Index& hint) const {
+  Hit best{p, std::numeric_limits<double>::infinity(), -1};
+  auto distance = [&](Index f) {
+    return (closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)), mesh_.positions.row(mesh_.triangles(f, 1)),
+                                      mesh_.positions.row(mesh_.triangles(f, 2))) - p).squaredNorm();
+  };
+  auto test_face = [&](Index f) {
+    const double d = distance(f);
+    if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best.squared_distance = d, best.face = f;
+  };
+  if (hint >= 0) test_face(hint);
+  int stack[128];
+  double stack_distance[128];
+  int top = 0;
+  auto push_children = [&](const Node& node) {
+    const int a = node.first, b = node.first + 1;
+    const double da = box_squared_distance(nodes_[a].box, p), db = box_squared_distance(nodes_[b].box, p);
+    if (da < db) {
+      stack_distance[top] = db, stack[top++] = b;
+      stack_distance[top] = da, stack[top++] = a;
+    } else {
+      stack_distance[top] = da, stack[top++] = a;
+      stack_distance[top] = db, stack[top++] = b;
+    }
+  };
+  stack_distance[top] = box_squared_distance(nodes_[0].box, p);
+  stack[top++] = 0;
+  while (top > 0) {
+    --top;
+    if (stack_distance[top] > best.squared_distance) continue;
+    const int i = stack[top];
+    if (sides_[i].all_same(unit)) continue;
+    const Node& node = nodes_[i];
+    if (node.count > 0) {
+      for (int s = node.first; s < node.first + node.count; ++s) test_face(order_[s]);
+      continue;
+    }
+    push_children(node);
+  }
+  if (best.face < 0) return false;
+  hint = best.face;
+  if (!(normals_[best.face].dot(normal) < 0)) return false;
+  bool passed_over[128];  // per stack entry: inside a node the first search passed over
+  top = 0;
+  stack_distance[top] = box_squared_distance(nodes_[0].box, p), passed_over[top] = false;
+  stack[top++] = 0;
+  while (top > 0) {
+    --top;
+    if (stack_distance[top] > best.squared_distance) continue;
+    const int i = stack[top];
+    const bool inside = passed_over[top] || sides_[i].all_same(unit);
+    const Node& node = nodes_[i];
+    if (node.count > 0) {
+      if (!inside) continue;  // searched already
+      for (int s = node.first; s < node.first + node.count; ++s) {
+        const Index f = order_[s];
+        const double d = distance(f);
+        if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) {
+          hint = f;
+          return false;
+        }
+      }
+      continue;
+    }
+    const int first = top;
+    push_children(node);
+    passed_over[first] = passed_over[first + 1] = inside;
+  }
+  return true;
 }
 
 AabbTree::Certificate AabbTree::leaf_certificate(int leaf) const {
@@ -279,6 +375,7 @@ bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& n
       if (c.settles_within(p, normal, (q - p).norm())) return false;
     }
   }
+  if (!sides_.empty()) return nearest_faces_against(p, normal, normal / length, hint);
   const Hit hit = closest(p, hint);
   hint = hit.face;
   if (hit.face < 0) return false;

@@ -80,12 +80,25 @@ class AabbTree {
   double distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vector3d& axis, double angle, double limit) const;
   /// The certificate of leaf node `leaf`.
   Certificate leaf_certificate(int leaf) const;
+  /// facing_against()'s search: whether the face closest(p) finds faces against `normal`, without
+  /// finding that face where its side is all that matters (see the .cpp). `unit`: normal / |normal|.
+  bool nearest_faces_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, const Eigen::Vector3d& unit,
+                             Index& hint) const;
   const Mesh& mesh_;
   std::vector<Node> nodes_;
   std::vector<Index> order_;
   // prepare_facing():
   std::vector<Eigen::Vector3d> normals_;  // per face, unit (zero: no area)
   std::vector<Cone> cones_;              // per node, while the certificates are found
+  // Per node, for nearest_faces_against(): its cone in floats, as the sine of its half angle that a
+  // unit normal n must clear for every face in it to face the same way as n (axis . n > sine; 2: never,
+  // -2: always, where no face has area). 16 bytes.
+  struct SideTest {
+    Eigen::Vector3f axis = Eigen::Vector3f::Zero();
+    float sine = 2;
+    bool all_same(const Eigen::Vector3d& unit) const { return axis.cast<double>().dot(unit) > sine; }
+  };
+  std::vector<SideTest> sides_;
   // One per leaf, not per face (a 32 MB table on 1M faces).
   std::vector<Certificate> certificates_;  // per leaf, in node order
   std::vector<std::int32_t> leaf_of_;      // per face: its leaf's index in certificates_
