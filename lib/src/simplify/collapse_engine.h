@@ -106,6 +106,7 @@ class Engine {
   SimplifyResult run(Index target);
 
  private:
+  // engine_setup.cpp: from the input to the engine's state.
   void setup(const Mesh& mesh);
   void setup_attributes(const Mesh& mesh);
   /// face_id: the face of each entry the edges name (empty: the same).
@@ -115,9 +116,14 @@ class Engine {
   /// of two faces once, from its lower face (classify_edges found both faces already; a search per
   /// edge was a fifth of the setup). With `consistent_only`, only faces that agree on orientation.
   std::vector<Index> faces_across(const std::vector<Index>& face_id, bool consistent_only) const;
-  // Checks are split by cost: the cheap ones (flags, shared faces, seam wedges) decide where the
-  // surviving vertex may go and run whenever a candidate is scored; the link condition and the
-  // geometric checks run once, when a candidate reaches the top of the queue.
+  /// Wedge w's attributes as the output has them (optimised values unscaled, normals unit length,
+  /// colours clamped to float), in the layout of attribute_values_per_vertex().
+  void output_attributes(Index w, double* out) const;
+
+  // engine_checks.cpp: whether a collapse is legal. Checks are split by cost: the cheap ones (flags,
+  // shared faces, seam wedges) decide where the surviving vertex may go and run whenever a candidate is
+  // scored; the link condition and the geometric checks run once, when a candidate reaches the top of
+  // the queue.
   /// The faces on edge uv, into probe.shared (in u's face order, which the wedge map follows).
   void find_shared_faces(Index u, Index v, Probe& probe) const;
   /// Expects probe.shared filled for this edge by find_shared_faces(). The link condition is checked
@@ -127,13 +133,6 @@ class Engine {
   Index wedge_at(Index f, Index p) const;
   /// With `inverted_ok`, faces facing against the input are let be (a waited entry; see kInvertedWait).
   Rejection geometry(Lane& lane, Index u, Index v, const Eigen::Vector3d& p, bool inverted_ok = false);
-  /// The top entry e, refused under InvertedFaces::Avoid for faces facing against the input: the first
-  /// time, queued again to wait (true); when it comes back unchanged, let be (false, and `verdict` says
-  /// whether the other checks pass).
-  bool wait_inverted(Lane& lane, const HeapEntry& e, const Candidate& c, Rejection& verdict);
-  /// Collapse u -> v to p, refused only for faces facing against the input, let be after all: the
-  /// other checks' verdict, and where the run did so when it did.
-  Rejection let_inverted_be(Lane& lane, Index u, Index v, const Eigen::Vector3d& p);
   /// Whether face f, with centroid `centroid` (absolute, not relative to the origin) and normal n,
   /// faces against the input face nearest its centroid (as count_flipped_faces() sees it), where in the
   /// input it did not. The search starts at the input face found nearest f last time (at first f
@@ -145,6 +144,8 @@ class Engine {
   /// The checks and the cost of u -> v, into lane.probe (the path that collapses). With `scored`, c
   /// already holds the cost of u -> v in the current state (recall()) and is not computed again.
   Rejection evaluate(Lane& lane, Index u, Index v, Candidate& c, bool full, bool scored = false);
+
+  // engine_rating.cpp: candidates into queue entries, and the entries' tags.
   /// Costly costs only: keeps the candidate behind queue entry e (from the main thread), so that it
   /// need not be scored again when e reaches the top unchanged.
   void remember(const HeapEntry& e, const Candidate& c);
@@ -173,7 +174,16 @@ class Engine {
   bool stale(const HeapEntry& e) const { return e.version != version_[e.u] + version_[e.v]; }
   /// An endpoint's neighbourhood changed since e was scored (wide updates): score it again.
   bool outdated(const HeapEntry& e) const { return e.epoch != dirty_[e.u] + dirty_[e.v]; }
+  /// The queue entries of these edges, rated side by side, in list order.
+  std::vector<HeapEntry> rate_all(const std::vector<std::pair<Index, Index>>& edges);
+  /// Every edge of the mesh as it is now, each once.
+  std::vector<std::pair<Index, Index>> remaining_edges();
+  void neighbours(Index p, std::vector<Index>& out) const { s_.ring(p, out); }
+
+  // engine_collapse.cpp: performing one.
   void collapse(Lane& lane, Index u, Index v, const Candidate& c);
+
+  // engine_run.cpp: the queue's loop, the lanes, the stop.
   /// Pops and collapses until `done` says stop or the queue runs dry: the loop of every lane.
   template <typename Done>
   void drain(Lane& lane, Done done, std::optional<std::pair<Index, Index>>& deferred);
@@ -183,12 +193,21 @@ class Engine {
   /// One pass of lanes over `slabs` until `stop_at` faces are left; takes the entries queued so far and
   /// returns those left, the rims' edges rated.
   std::vector<HeapEntry> lane_pass(Slabs slabs, Index stop_at, std::vector<HeapEntry>& queued);
-  /// Every edge of the mesh as it is now, each once.
-  std::vector<std::pair<Index, Index>> remaining_edges();
-  /// The queue entries of these edges, rated side by side, in list order.
-  std::vector<HeapEntry> rate_all(const std::vector<std::pair<Index, Index>>& edges);
+  /// The top entry e, refused under InvertedFaces::Avoid for faces facing against the input: the first
+  /// time, queued again to wait (true); when it comes back unchanged, let be (false, and `verdict` says
+  /// whether the other checks pass).
+  bool wait_inverted(Lane& lane, const HeapEntry& e, const Candidate& c, Rejection& verdict);
+  /// Collapse u -> v to p, refused only for faces facing against the input, let be after all: the
+  /// other checks' verdict, and where the run did so when it did.
+  Rejection let_inverted_be(Lane& lane, Index u, Index v, const Eigen::Vector3d& p);
   /// Calls the progress callback, about once a percent, with `alive` faces left.
   void report_progress(Index alive);
+  /// The cheapest legal collapse of a boundary edge (it removes one face), if any.
+  std::optional<std::pair<Index, Index>> cheapest_boundary_collapse(Lane& lane);
+  /// Why the remaining edges cannot collapse: the sentence, and the edges counted by reason.
+  std::string stop_report(Index target, BlockedEdges& blocked);
+
+  // Prefetching, for the queue's loop and the collapse.
   /// Point p's data asked for before it is needed: the loop is bound by cache misses on points
   /// scattered over a large mesh, and asking for several at once overlaps them. For rating an edge at
   /// p: its quadric, position and face list's header (not the list: rating does not read it, and
@@ -213,14 +232,6 @@ class Engine {
     for (Index f : s_.faces_of(p))
       for (int k = 0; k < 3; ++k) __builtin_prefetch(&s_.position[s_.corner_point(f, k)]);
   }
-  void neighbours(Index p, std::vector<Index>& out) const { s_.ring(p, out); }
-  /// Wedge w's attributes as the output has them (optimised values unscaled, normals unit length,
-  /// colours clamped to float), in the layout of attribute_values_per_vertex().
-  void output_attributes(Index w, double* out) const;
-  /// The cheapest legal collapse of a boundary edge (it removes one face), if any.
-  std::optional<std::pair<Index, Index>> cheapest_boundary_collapse(Lane& lane);
-  /// Why the remaining edges cannot collapse: the sentence, and the edges counted by reason.
-  std::string stop_report(Index target, BlockedEdges& blocked);
 
   SimplifyOptions o_;
   EngineState s_;
