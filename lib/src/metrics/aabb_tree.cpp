@@ -34,6 +34,24 @@ double box_squared_distance(const Eigen::AlignedBox3d& box, const Eigen::Vector3
   return (p - p.cwiseMax(box.min()).cwiseMin(box.max())).squaredNorm();
 }
 
+// The nodes a depth-first search has yet to visit, each with its box's squared distance from the
+// point (found once, when its parent was opened) and a flag of the search's own.
+struct NodeStack {
+  int node[128];
+  double distance[128];
+  bool flag[128];
+  int top = 0;
+  void push(int i, double d, bool f = false) { node[top] = i, distance[top] = d, flag[top] = f, ++top; }
+  // Both children of inner node `parent`, the nearer on top (visited first).
+  template <typename Node>
+  void push_children(const std::vector<Node>& nodes, const Node& parent, const Eigen::Vector3d& p, bool f = false) {
+    const int a = parent.first, b = parent.first + 1;
+    const double da = box_squared_distance(nodes[a].box, p), db = box_squared_distance(nodes[b].box, p);
+    if (da < db) push(b, db, f), push(a, da, f);
+    else push(a, da, f), push(b, db, f);
+  }
+};
+
 // Nodes of a subtree over n faces and over n + 1: the tree splits at the median, so this depends on
 // n alone. (Halves differ by one at most, so two counts per level carry the recursion.)
 std::pair<int, int> subtree_nodes_pair(int n) {
@@ -103,29 +121,17 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
   };
   if (hint >= 0) test_face(hint);
   if (nodes_.empty() || order_.empty()) return best;
-  int stack[128];
-  double stack_distance[128];
-  int top = 0;
-  stack_distance[top] = box_squared_distance(nodes_[0].box, p);
-  stack[top++] = 0;
-  while (top > 0) {
-    --top;
-    if (stack_distance[top] > best.squared_distance) continue;
-    const Node& node = nodes_[stack[top]];
+  NodeStack stack;
+  stack.push(0, box_squared_distance(nodes_[0].box, p));
+  while (stack.top > 0) {
+    --stack.top;
+    if (stack.distance[stack.top] > best.squared_distance) continue;
+    const Node& node = nodes_[stack.node[stack.top]];
     if (node.count > 0) {
       for (int i = node.first; i < node.first + node.count; ++i) test_face(order_[i]);
       continue;
     }
-    // Visit the nearer child first (pushed last).
-    const int a = node.first, b = node.first + 1;
-    const double da = box_squared_distance(nodes_[a].box, p), db = box_squared_distance(nodes_[b].box, p);
-    if (da < db) {
-      stack_distance[top] = db, stack[top++] = b;
-      stack_distance[top] = da, stack[top++] = a;
-    } else {
-      stack_distance[top] = da, stack[top++] = a;
-      stack_distance[top] = db, stack[top++] = b;
-    }
+    stack.push_children(nodes_, node, p);
   }
   return best;
 }
@@ -228,46 +234,30 @@ bool AabbTree::nearest_faces_against(const Eigen::Vector3d& p, const Eigen::Vect
     if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best.squared_distance = d, best.face = f;
   };
   if (hint >= 0) test_face(hint);
-  int stack[128];
-  double stack_distance[128];
-  int top = 0;
-  auto push_children = [&](const Node& node) {
-    const int a = node.first, b = node.first + 1;
-    const double da = box_squared_distance(nodes_[a].box, p), db = box_squared_distance(nodes_[b].box, p);
-    if (da < db) {
-      stack_distance[top] = db, stack[top++] = b;
-      stack_distance[top] = da, stack[top++] = a;
-    } else {
-      stack_distance[top] = da, stack[top++] = a;
-      stack_distance[top] = db, stack[top++] = b;
-    }
-  };
-  stack_distance[top] = box_squared_distance(nodes_[0].box, p);
-  stack[top++] = 0;
-  while (top > 0) {
-    --top;
-    if (stack_distance[top] > best.squared_distance) continue;
-    const int i = stack[top];
+  NodeStack stack;
+  stack.push(0, box_squared_distance(nodes_[0].box, p));
+  while (stack.top > 0) {
+    --stack.top;
+    if (stack.distance[stack.top] > best.squared_distance) continue;
+    const int i = stack.node[stack.top];
     if (sides_[i].all_same(unit)) continue;
     const Node& node = nodes_[i];
     if (node.count > 0) {
       for (int s = node.first; s < node.first + node.count; ++s) test_face(order_[s]);
       continue;
     }
-    push_children(node);
+    stack.push_children(nodes_, node, p);
   }
   if (best.face < 0) return false;
   hint = best.face;
   if (!(normals_[best.face].dot(normal) < 0)) return false;
-  bool passed_over[128];  // per stack entry: inside a node the first search passed over
-  top = 0;
-  stack_distance[top] = box_squared_distance(nodes_[0].box, p), passed_over[top] = false;
-  stack[top++] = 0;
-  while (top > 0) {
-    --top;
-    if (stack_distance[top] > best.squared_distance) continue;
-    const int i = stack[top];
-    const bool inside = passed_over[top] || sides_[i].all_same(unit);
+  // The flag: inside a node the first search passed over.
+  stack.push(0, box_squared_distance(nodes_[0].box, p));
+  while (stack.top > 0) {
+    --stack.top;
+    if (stack.distance[stack.top] > best.squared_distance) continue;
+    const int i = stack.node[stack.top];
+    const bool inside = stack.flag[stack.top] || sides_[i].all_same(unit);
     const Node& node = nodes_[i];
     if (node.count > 0) {
       if (!inside) continue;  // searched already
@@ -281,9 +271,7 @@ bool AabbTree::nearest_faces_against(const Eigen::Vector3d& p, const Eigen::Vect
       }
       continue;
     }
-    const int first = top;
-    push_children(node);
-    passed_over[first] = passed_over[first + 1] = inside;
+    stack.push_children(nodes_, node, p, inside);
   }
   return true;
 }
@@ -325,14 +313,14 @@ double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vecto
   // when none of its faces can be.
   const double cos_angle = std::cos(angle), sin_angle = std::sin(angle);
   double best = limit * limit;
-  int stack[128];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const int i = stack[--top];
+  NodeStack stack;
+  stack.push(0, box_squared_distance(nodes_[0].box, p));
+  while (stack.top > 0) {
+    --stack.top;
+    if (stack.distance[stack.top] >= best) continue;
+    const int i = stack.node[stack.top];
     const Node& node = nodes_[i];
     const Cone& cone = cones_[i];
-    if (box_squared_distance(node.box, p) >= best) continue;
     if (cone.half_angle < 0) continue;  // no face with area
     // angle(axis, cone axis) + half angle <= angle, as cos(angle - half angle) <= axis . cone axis
     if (cone.half_angle <= angle &&
@@ -349,10 +337,7 @@ double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vecto
       }
       continue;
     }
-    const int a = node.first, b = node.first + 1;
-    const bool a_nearer = box_squared_distance(nodes_[a].box, p) < box_squared_distance(nodes_[b].box, p);
-    stack[top++] = a_nearer ? b : a;
-    stack[top++] = a_nearer ? a : b;
+    stack.push_children(nodes_, node, p);
   }
   return std::sqrt(best);
 }
