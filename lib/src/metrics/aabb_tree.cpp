@@ -342,14 +342,15 @@ double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vecto
   return std::sqrt(best);
 }
 
-bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const {
+bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint,
+                              const Certificate* hint_certificate) const {
   const double length = normal.norm();
   if (!(length > 0)) return false;
   // Let a be the hint leaf's anchor, e its distance off the surface, g the face nearest p. Then
   // |p - g| <= |p - a| + e, and g comes within 2 |p - a| + e of a: inside the clearance, g turns less
   // than cone + kTurn from the axis, so less than a right angle from `normal`.
   if (hint >= 0) {
-    const Certificate& c = certificate(hint);
+    const Certificate& c = hint_certificate ? *hint_certificate : certificate(hint);
     if (c.settles(p, normal)) return false;
     // The hint face's own distance is a bound on the nearest face's: where p lies nearer the surface
     // than the anchor, it reaches further (a large face's centroid far from its leaf's anchor).

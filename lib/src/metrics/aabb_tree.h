@@ -26,8 +26,11 @@ class AabbTree {
   /// face without area faces neither way. `hint`: a face near p, or -1; on return, a face near p to
   /// start from next time. Where the faces around the hint all lie within a narrow cone of normals
   /// far enough out from p, the answer follows without a search (see the .cpp); without
-  /// prepare_facing(), every call searches. Safe to call from several threads.
-  bool facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const;
+  /// prepare_facing(), every call searches. `hint_certificate`: the hint's certificate, where the caller
+  /// keeps a copy of it (certificate(hint)), saving the two lookups. Safe to call from several threads.
+  struct Certificate;
+  bool facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint,
+                      const Certificate* hint_certificate = nullptr) const;
 
   /// What facing_against() may conclude without a search, for the faces of one leaf: a normal n with
   /// axis . n > min_dot |n|, asked about at a point p with 2 |p - anchor| < clearance, faces the same

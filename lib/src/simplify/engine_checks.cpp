@@ -157,7 +157,7 @@ bool Engine::faces_against_input(Index f, const Eigen::Vector3d& centroid, const
   // lies in that slab), so no entry is written by two at once.
   NearestInput& last = nearest_input_[f];
   Index hint = last.face;
-  const bool now = input_tree_->facing_against(centroid, n, hint);
+  const bool now = input_tree_->facing_against(centroid, n, hint, &last.certificate);
   if (hint != last.face) last = {input_tree_->certificate(hint), hint};
   if (!now) return false;
   // Whether input face f already faced against its nearest input face: found once per face.
