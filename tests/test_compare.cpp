@@ -3,7 +3,12 @@
 #include <lodkit/metrics.h>
 #include <lodkit/primitives.h>
 
+#include <lodkit/simplify.h>
+
 #include <tbb/global_control.h>
+
+#include "metrics/aabb_tree.h"
+#include "test_util.h"
 
 namespace lodkit {
 namespace {
@@ -114,13 +119,122 @@ TEST(Compare, AReferenceMeasuresEveryMeshAsCompareDoes) {
 }
 
 TEST(Compare, CountsEveryCornerAndEdgeOfEveryFace) {
-  // Corners and edge midpoints shared by faces are measured once but counted, and refined, per face.
+  // Corners and edge midpoints shared by faces are measured once but counted per face.
   const Mesh a = make_torus({.major_segments = 12, .minor_segments = 6});
   CompareOptions o;
   o.samples = 5000;
-  o.refine_rounds = 0;
   const Comparison c = compare(a, a, o);
   EXPECT_EQ(c.a_to_b.samples, 6LL * a.num_faces() + 5000);
+}
+
+// The largest distance from `from` to `to` over a barycentric grid of n x n steps on every face,
+// corners and edges included: a search denser than compare()'s, by brute force.
+double dense_max(const Mesh& from, const Mesh& to, int n) {
+  const detail::AabbTree tree(to);
+  double worst = 0;
+  for (Index f = 0; f < from.num_faces(); ++f) {
+    const Eigen::Vector3d a = from.positions.row(from.triangles(f, 0)), b = from.positions.row(from.triangles(f, 1)),
+                          c = from.positions.row(from.triangles(f, 2));
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; i + j <= n; ++j)
+        worst = std::max(worst, tree.closest(a + (b - a) * i / n + (c - a) * j / n).squared_distance);
+  }
+  return std::sqrt(worst);
+}
+
+// The maximum compare() reports is attained (no more than the dense search can find, bar rounding),
+// within the tolerance of its bound, and the bound is no less than the dense search finds.
+void expect_brackets(const Mesh& a, const Mesh& b, const CompareOptions& o, int n) {
+  const Comparison c = compare(a, b, o);
+  for (const auto& [d, dense] : {std::pair{c.a_to_b, dense_max(a, b, n)}, std::pair{c.b_to_a, dense_max(b, a, n)}}) {
+    EXPECT_LE(dense, d.max_bound * (1 + 1e-12));
+    EXPECT_LE(d.max, d.max_bound);
+    if (o.max_splits > 0) {
+      EXPECT_LE(d.max_bound, d.max * (1 + o.hausdorff_tolerance) + 1e-12);
+      EXPECT_GE(d.max, dense / (1 + o.hausdorff_tolerance) - 1e-12);
+    }
+  }
+  EXPECT_EQ(c.hausdorff_bound, std::max(c.a_to_b.max_bound, c.b_to_a.max_bound));
+}
+
+TEST(Compare, CertifiesAMaximumBetweenSamples) {
+  // A flat square 0.2 above a V-shaped valley of slope 0.5: the distance peaks along the valley's line
+  // x = 0, which no vertex or edge midpoint of the square lies on, at 0.2 / sqrt(1 + 0.5^2).
+  Mesh valley;
+  valley.positions.resize(6, 3);
+  valley.positions << -1, -1, 0.5, 0, -1, 0, 1, -1, 0.5, -1, 1, 0.5, 0, 1, 0, 1, 1, 0.5;
+  valley.triangles.resize(4, 3);
+  valley.triangles << 0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4;
+  Mesh square;
+  square.positions.resize(4, 3);
+  square.positions << -0.5, -0.5, 0.2, 0.3, -0.5, 0.2, 0.3, 0.5, 0.2, -0.5, 0.5, 0.2;
+  square.triangles.resize(2, 3);
+  square.triangles << 0, 1, 2, 0, 2, 3;
+  const double exact = 0.2 / std::sqrt(1.25);
+  CompareOptions o;
+  o.samples = 10'000;
+  const Comparison c = compare(valley, square, o);
+  EXPECT_LE(c.b_to_a.max, exact * (1 + 1e-12));
+  EXPECT_GE(c.b_to_a.max_bound, exact * (1 - 1e-12));
+  EXPECT_LE(c.b_to_a.max_bound, c.b_to_a.max * (1 + o.hausdorff_tolerance));
+  // With a tolerance of 1e-9 the search closes in on the line itself.
+  o.hausdorff_tolerance = 1e-9;
+  EXPECT_NEAR(compare(valley, square, o).b_to_a.max, exact, 1e-9);
+}
+
+TEST(Compare, AHoleUnderAFaceIsNotCovered) {
+  // A square 0.1 above a plane with a square hole of half-width 0.25 that no corner of the square lies
+  // over: the farthest point is over the hole's centre, sqrt(0.1^2 + 0.25^2) from its rim. The faces
+  // around the hole must not be taken to cover it.
+  const Mesh grid = make_grid({.size = {2, 2}, .divisions_x = 8, .divisions_y = 8});
+  Mesh holed = grid;
+  std::vector<Index> kept;
+  for (Index f = 0; f < grid.num_faces(); ++f) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) centroid += grid.positions.row(grid.triangles(f, k)).transpose() / 3.0;
+    if (std::abs(centroid.x()) > 0.25 || std::abs(centroid.y()) > 0.25) kept.push_back(f);
+  }
+  holed.triangles = grid.triangles(kept, Eigen::all);
+  ASSERT_EQ(holed.num_faces(), grid.num_faces() - 8);
+  Mesh square;
+  square.positions.resize(4, 3);
+  square.positions << -0.9, -0.7, 0.1, 0.8, -0.7, 0.1, 0.8, 0.9, 0.1, -0.9, 0.9, 0.1;
+  square.triangles.resize(2, 3);
+  square.triangles << 0, 1, 2, 0, 2, 3;
+  const double exact = std::sqrt(0.1 * 0.1 + 0.25 * 0.25);
+  CompareOptions o;
+  o.samples = 1000;
+  for (long long splits : {0LL, 1'000'000LL}) {
+    o.max_splits = splits;
+    const Comparison c = compare(square, holed, o);
+    EXPECT_LE(c.a_to_b.max, exact * (1 + 1e-12));
+    EXPECT_GE(c.a_to_b.max_bound, exact * (1 - 1e-12));
+    if (splits > 0) EXPECT_LE(c.a_to_b.max_bound, c.a_to_b.max * (1 + o.hausdorff_tolerance));
+  }
+}
+
+TEST(Compare, BracketsTheMaximumOfASimplifiedSurface) {
+  // A bumpy sphere and its simplification, closed and with seams (flat-shaded: three vertices of its
+  // own per face), and an open bumpy patch: the bound holds, with no split at all, against a dense
+  // brute-force search, and the split search ends within its tolerance.
+  const Mesh fine = test::bumpy_sphere(3, 0.05);
+  SimplifyOptions so;
+  so.target_faces = 80;
+  const Mesh coarse = simplify(fine, so).mesh;
+  Mesh patch = make_grid({.size = {2, 2}, .divisions_x = 24, .divisions_y = 24});
+  for (Index v = 0; v < patch.num_vertices(); ++v)
+    patch.positions(v, 2) = 0.05 * std::sin(7 * patch.positions(v, 0)) * std::cos(5 * patch.positions(v, 1));
+  so.target_faces = 60;
+  const Mesh coarse_patch = simplify(patch, so).mesh;
+  CompareOptions o;
+  o.samples = 20'000;
+  for (long long splits : {0LL, 1'000'000LL}) {
+    SCOPED_TRACE(splits);
+    o.max_splits = splits;
+    expect_brackets(fine, coarse, o, 24);
+    expect_brackets(test::flat_shaded(fine), test::flat_shaded(coarse), o, 24);
+    expect_brackets(patch, coarse_patch, o, 24);
+  }
 }
 
 TEST(Compare, RefusesEmptyMeshes) { EXPECT_THROW(compare(Mesh{}, make_box({})), Error); }

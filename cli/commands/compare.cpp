@@ -17,7 +17,8 @@ struct CompareCliOptions {
 };
 
 nlohmann::json directed_json(const DirectedDistance& d, const Comparison& c) {
-  return {{"max", d.max}, {"max_percent", c.percent(d.max)}, {"mean", d.mean}, {"mean_percent", c.percent(d.mean)},
+  return {{"max", d.max}, {"max_percent", c.percent(d.max)}, {"max_bound", d.max_bound},
+          {"max_bound_percent", c.percent(d.max_bound)}, {"max_queries", d.max_queries}, {"mean", d.mean}, {"mean_percent", c.percent(d.mean)},
           {"rms", d.rms}, {"rms_percent", c.percent(d.rms)}, {"normal_deviation_mean_deg", d.normal_deviation_mean_deg},
           {"normal_deviation_max_deg", d.normal_deviation_max_deg}, {"samples", d.samples}};
 }
@@ -46,7 +47,8 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
             if (opt->json) {
               nlohmann::json j{{"a", opt->a}, {"b", opt->b}, {"diagonal", c.diagonal},
                                {"hausdorff", c.hausdorff}, {"hausdorff_percent", c.percent(c.hausdorff)},
-                               {"mean", c.mean}, {"mean_percent", c.percent(c.mean)},
+                               {"hausdorff_bound", c.hausdorff_bound},
+                               {"hausdorff_bound_percent", c.percent(c.hausdorff_bound)}, {"mean", c.mean}, {"mean_percent", c.percent(c.mean)},
                                {"rms", c.rms}, {"rms_percent", c.percent(c.rms)},
                                {"a_to_b", directed_json(c.a_to_b, c)}, {"b_to_a", directed_json(c.b_to_a, c)}};
               fmt::print("{}\n", j.dump(2));
@@ -57,6 +59,7 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
             row("Hausdorff", c.hausdorff);
             row("  A -> B (max)", c.a_to_b.max);
             row("  B -> A (max)", c.b_to_a.max);
+            row("  certified at most", c.hausdorff_bound);
             row("mean", c.mean);
             row("RMS", c.rms);
             fmt::print("{:<22} {:>14.3f} deg (mean), {:.1f} deg (max)\n", "normal deviation A->B",

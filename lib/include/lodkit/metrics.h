@@ -3,10 +3,12 @@
 //
 // Each direction samples the first surface at its vertices, along its edges and inside its faces
 // (a stratified R2 low-discrepancy pattern, allotted by area) and finds each sample's closest point
-// on the other surface with an AABB tree. Hausdorff is the largest such distance; mean and RMS are
-// area-weighted over the face samples. The largest distances are then refined: the faces holding the
-// worst samples are resampled much more densely until the maximum stops growing (by less than
-// `refine_tolerance`), so refining further would not change the reported Hausdorff distance.
+// on the other surface with an AABB tree. Mean and RMS are area-weighted over the face samples. The
+// largest distance is certified by branch and bound: the samples give a lower bound; over each
+// triangle the distance is at most its corners' farthest from any one face of the other surface (the
+// distance to a triangle is convex), and triangles whose bound exceeds the lower bound are split until
+// it does not, by `hausdorff_tolerance`. The reported maximum is attained at a point; `max_bound`
+// proves none lies farther.
 // Parallel with TBB; every sample's result is stored by index and reduced in order, so the answer is
 // identical for any thread count.
 #include <lodkit/mesh.h>
@@ -22,14 +24,16 @@ long long default_face_samples(Index faces);
 struct CompareOptions {
   /// Face samples per direction; default default_face_samples() of the larger mesh.
   std::optional<long long> samples{};
-  /// Rounds of re-sampling around the worst distances (0 = none).
-  int refine_rounds = 4;
-  /// Stop refining when a round raises the maximum by less than this fraction.
-  double refine_tolerance = 1e-3;
+  /// Certify the maximum to this fraction: max_bound <= max * (1 + hausdorff_tolerance).
+  double hausdorff_tolerance = 1e-3;
+  /// At most this many triangle splits per direction; max_bound then says how far it got.
+  long long max_splits = 1'000'000;
 };
 
 struct DirectedDistance {
-  double max = 0.0;   ///< one-sided Hausdorff distance
+  double max = 0.0;        ///< one-sided Hausdorff distance: attained at a point of the first surface
+  double max_bound = 0.0;  ///< certified: no point of the first surface is farther from the second
+  long long max_queries = 0;  ///< closest-point queries the certificate took, beyond the samples
   double mean = 0.0;  ///< area-weighted mean distance
   double rms = 0.0;   ///< area-weighted root mean square distance
   double normal_deviation_mean_deg = 0.0;  ///< angle between the two surfaces' face normals
@@ -41,6 +45,7 @@ struct Comparison {
   DirectedDistance a_to_b;  ///< samples on A, distances to B
   DirectedDistance b_to_a;
   double hausdorff = 0.0;   ///< max of the two one-sided distances
+  double hausdorff_bound = 0.0;  ///< max of the two certified bounds: the true value is in [hausdorff, this]
   double mean = 0.0;        ///< average of the two means
   double rms = 0.0;         ///< sqrt of the average of the two mean squares
   double diagonal = 0.0;    ///< bounding-box diagonal of A: the reference for percentages

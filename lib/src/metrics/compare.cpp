@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "metrics/aabb_tree.h"
+#include "metrics/max_distance_bound.h"
 
 namespace lodkit {
 namespace {
@@ -32,6 +33,7 @@ struct SampleSet {
   };
   std::vector<Point> points;
   std::vector<Sample> samples;
+  std::vector<std::uint32_t> vertex_point;  // each vertex's point (kNone for a vertex no face uses)
 
   void add_unique(const Eigen::Vector3d& p, Index f, double weight) {
     samples.push_back({static_cast<std::uint32_t>(points.size()), f, weight});
@@ -59,11 +61,13 @@ void sample_face(const Mesh& m, Index f, long long k, double weight, SampleSet& 
   }
 }
 
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
 // Every face's corners and edge midpoints, in face order, each distinct vertex or edge measured once.
 void sample_vertices_and_edges(const Mesh& m, SampleSet& out) {
-  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   const Index nv = m.num_vertices(), nf = m.num_faces();
-  std::vector<std::uint32_t> vertex_point(static_cast<std::size_t>(nv), kNone);
+  std::vector<std::uint32_t>& vertex_point = out.vertex_point;
+  vertex_point.assign(static_cast<std::size_t>(nv), kNone);
   // Edges grouped by their lower vertex: slots [first[lo], first[lo + 1]), filled[lo] of them in use.
   std::vector<std::uint32_t> first(static_cast<std::size_t>(nv) + 1, 0), filled(static_cast<std::size_t>(nv), 0);
   for (Index f = 0; f < nf; ++f)
@@ -121,6 +125,7 @@ SampleSet sample_surface(const Mesh& m, long long face_samples) {
 
 struct Measured {
   double distance, angle_deg;
+  Index nearest;  // the face of the other mesh nearest the point
 };
 
 // Each distinct point's distance to `to`, and the angle between its face's normal and the normal of
@@ -134,7 +139,8 @@ std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh
       hint = hit.face;
       const Eigen::Vector3d n0 = face_normal(from, set.points[i].face), n1 = face_normal(to, hit.face);
       // atan2 keeps small angles accurate where acos(dot) would lose them.
-      result[i] = {std::sqrt(hit.squared_distance), std::atan2(n0.cross(n1).norm(), n0.dot(n1)) * 180.0 / std::numbers::pi};
+      result[i] = {std::sqrt(hit.squared_distance), std::atan2(n0.cross(n1).norm(), n0.dot(n1)) * 180.0 / std::numbers::pi,
+                   hit.face};
     }
   });
   return result;
@@ -142,12 +148,10 @@ std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh
 
 DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh& to, const detail::AabbTree& tree,
                           const CompareOptions& o) {
-  std::vector<Measured> measured = measure(sampled, from, to, tree);
-  const std::vector<SampleSet::Sample>* samples = &sampled.samples;
-
+  const std::vector<Measured> measured = measure(sampled, from, to, tree);
   DirectedDistance d;
   double weight = 0, sum = 0, sum2 = 0, angle_sum = 0;
-  for (const SampleSet::Sample& s : *samples) {
+  for (const SampleSet::Sample& s : sampled.samples) {
     const Measured& m = measured[s.point];
     d.max = std::max(d.max, m.distance);
     const double w = s.weight;
@@ -163,36 +167,19 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
     d.rms = std::sqrt(sum2 / weight);
     d.normal_deviation_mean_deg = angle_sum / weight;
   }
-  d.samples = static_cast<long long>(samples->size());
+  d.samples = static_cast<long long>(sampled.samples.size());
 
-  // Refine around the worst samples: resample their faces 256x more densely until the maximum settles.
-  SampleSet dense;
-  for (int round = 0; round < o.refine_rounds; ++round) {
-    auto distance = [&](std::size_t i) { return measured[(*samples)[i].point].distance; };
-    std::vector<std::size_t> order(samples->size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    const std::size_t top = std::min<std::size_t>(order.size(), 64);
-    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(top), order.end(),
-                      [&](std::size_t a, std::size_t b) {
-                        return distance(a) != distance(b) ? distance(a) > distance(b) : a < b;
-                      });
-    std::vector<Index> faces;
-    for (std::size_t i = 0; i < top; ++i) faces.push_back((*samples)[order[i]].face);
-    std::sort(faces.begin(), faces.end());
-    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-    SampleSet next;
-    for (Index f : faces) sample_face(from, f, 256, 0.0, next);
-    const std::vector<Measured> dm = measure(next, from, to, tree);
-    double new_max = d.max;
-    for (const Measured& m : dm) new_max = std::max(new_max, m.distance);
-    d.samples += static_cast<long long>(next.samples.size());
-    const bool settled = new_max <= d.max * (1 + o.refine_tolerance);
-    d.max = new_max;
-    dense = std::move(next);
-    samples = &dense.samples;
-    measured = dm;
-    if (settled) break;
-  }
+  // The maximum, bracketed: the samples' largest distance is only a lower bound of it.
+  std::vector<double> corner_distance(sampled.vertex_point.size(), 0.0);
+  std::vector<Index> corner_face(sampled.vertex_point.size(), -1);
+  for (std::size_t v = 0; v < sampled.vertex_point.size(); ++v)
+    if (const std::uint32_t p = sampled.vertex_point[v]; p != kNone)
+      corner_distance[v] = measured[p].distance, corner_face[v] = measured[p].nearest;
+  const detail::MaxDistanceBound bound = detail::bound_max_distance(
+      from, to, tree, corner_distance, corner_face, d.max, {.tolerance = o.hausdorff_tolerance, .max_splits = o.max_splits});
+  d.max = bound.attained;
+  d.max_bound = bound.bound;
+  d.max_queries = bound.queries;
   return d;
 }
 
@@ -205,6 +192,7 @@ Comparison combine(const Mesh& a, DirectedDistance a_to_b, DirectedDistance b_to
   c.a_to_b = a_to_b;
   c.b_to_a = b_to_a;
   c.hausdorff = std::max(c.a_to_b.max, c.b_to_a.max);
+  c.hausdorff_bound = std::max(c.a_to_b.max_bound, c.b_to_a.max_bound);
   c.mean = 0.5 * (c.a_to_b.mean + c.b_to_a.mean);
   c.rms = std::sqrt(0.5 * (c.a_to_b.rms * c.a_to_b.rms + c.b_to_a.rms * c.b_to_a.rms));
   const auto box = bounding_box(a);

@@ -1,0 +1,40 @@
+#pragma once
+// The largest distance from one surface to another, bracketed by branch and bound: a value attained
+// at a point of the surface (below) and a proof that no point lies farther (above).
+#include <lodkit/mesh.h>
+
+#include <Eigen/Core>
+#include <span>
+
+namespace lodkit::detail {
+
+class AabbTree;
+
+struct MaxDistanceOptions {
+  /// Stop once the bound above is within this fraction of the value attained.
+  double tolerance = 1e-3;
+  /// Stop after this many triangle splits, the bound above then as far as it got.
+  long long max_splits = 1'000'000;
+};
+
+struct MaxDistanceBound {
+  double attained = 0;  ///< the distance of a point of `from`: a lower bound of the maximum
+  double bound = 0;     ///< no point of `from` is farther from `to` than this
+  long long splits = 0;
+  long long queries = 0;  ///< closest-point queries made
+};
+
+/// The maximum over `from`'s surface of the distance to `to` (whose tree is `tree`). `corner_distance`
+/// and `corner_face`: each vertex of `from`, its distance to `to` and the face of `to` nearest it (a
+/// vertex no face uses is ignored). `attained`: a distance already measured at some point of `from`.
+///
+/// Why it is a bound: the distance to any single triangle F is a convex function of the point, so over
+/// a triangle T it peaks at a corner; and the distance to `to` is at most the distance to F. So
+/// max over T ≤ max over T's corners of dist(corner, F), for any F. The faces nearest T's corners and
+/// centroid make F's candidates; triangles whose bound exceeds what is attained are split in four
+/// until it does not (by `tolerance`), largest bound first.
+MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const AabbTree& tree,
+                                    std::span<const double> corner_distance, std::span<const Index> corner_face,
+                                    double attained, const MaxDistanceOptions& options = {});
+
+}  // namespace lodkit::detail
