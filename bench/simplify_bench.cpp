@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
   std::ofstream csv;
   if (!csv_path.empty()) {
     csv.open(csv_path);
-    csv << "mesh,faces_in,target,method,faces_out,seconds,peak_mib,hausdorff_pct,rms_pct,normal_dev_deg,non_manifold_edges,flipped,components,euler\n";
+    csv << "mesh,faces_in,target,method,faces_out,seconds,peak_mib,hausdorff_pct,rms_pct,normal_dev_deg,non_manifold_edges,flipped,components,euler,hausdorff_bound_pct\n";
   }
   fmt::print("| mesh → target | method | time s | peak MiB | faces | Hausdorff % | RMS % | non-manifold edges | flipped |\n");
   fmt::print("|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
@@ -160,9 +160,10 @@ int main(int argc, char** argv) {
                    o.mesh.num_faces(), c.percent(c.hausdorff), c.percent(c.rms), r.non_manifold_edges, flipped);
         std::fflush(stdout);
         if (csv.is_open())
-          csv << fmt::format("{},{},{},{},{},{:.6f},{:.1f},{:.6f},{:.7f},{:.4f},{},{},{},{}\n", name, mesh.num_faces(), target,
+          csv << fmt::format("{},{},{},{},{},{:.6f},{:.1f},{:.6f},{:.7f},{:.4f},{},{},{},{},{:.6f}\n", name, mesh.num_faces(), target,
                              method, o.mesh.num_faces(), o.seconds, o.peak_mib, c.percent(c.hausdorff), c.percent(c.rms),
-                             normal_dev, r.non_manifold_edges, flipped, r.components, r.euler_characteristic);
+                             normal_dev, r.non_manifold_edges, flipped, r.components, r.euler_characteristic,
+                             c.percent(c.hausdorff_bound));
       }
     }
   }

@@ -102,7 +102,8 @@ void put_measured(nlohmann::json& j, const std::optional<Measured>& m) {
     return;
   }
   const Comparison& c = m->distances;
-  j["measured"] = {{"hausdorff", c.hausdorff}, {"hausdorff_percent", c.percent(c.hausdorff)}, {"rms", c.rms},
+  j["measured"] = {{"hausdorff", c.hausdorff}, {"hausdorff_percent", c.percent(c.hausdorff)},
+                   {"hausdorff_bound", c.hausdorff_bound}, {"hausdorff_bound_percent", c.percent(c.hausdorff_bound)}, {"rms", c.rms},
                    {"rms_percent", c.percent(c.rms)}, {"inverted_faces", m->inverted_faces}};
 }
 
