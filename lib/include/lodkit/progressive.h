@@ -31,7 +31,7 @@ namespace lodkit {
 /// The Hausdorff distance and RMS distance between one level and the finest, measured by compare().
 struct LevelMeasurement {
   Index level = 0;
-  double hausdorff = 0.0;
+  double hausdorff = 0.0;  ///< an upper bound: compare()'s certified one, or the level's own if lower
   double rms = 0.0;
 };
 
@@ -136,7 +136,8 @@ struct MeasureLevelsOptions {
 };
 
 /// Measures the Hausdorff and RMS distances between `input` (the mesh `pm` was built from) and levels
-/// of `pm`, and stores them in pm.measured. Each Hausdorff distance is raised to at least those of the
+/// of `pm`, and stores them in pm.measured. Each Hausdorff distance is an upper bound (compare()'s
+/// hausdorff_bound, or pm.level_error where lower), raised to at least those of the
 /// finer measured levels, so the values do not increase with the level. \throw Error if `input` does
 /// not have the finest level's face count.
 void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsOptions& options = {});

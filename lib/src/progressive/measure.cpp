@@ -34,14 +34,16 @@ void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsO
       cursor.go_to(level);
       const Comparison c = reference.compare(cursor.extract(VertexOrder::Stream).mesh,
                                              std::min(input_samples, default_face_samples(pm.num_faces(level))));
-      measured.push_back({level, c.hausdorff, c.rms});
+      // An upper bound, so that a level chosen by it keeps its budget: compare()'s certified bound, or
+      // the level's own where that is lower.
+      measured.push_back({level, std::min(c.hausdorff_bound, pm.level_error[level]), c.rms});
     }
     const double next_faces = std::ceil(double(pm.num_faces(level)) * options.face_factor);
     const Index next = level_for_faces(pm, static_cast<Index>(std::min(next_faces, 2e9)));
     level = std::max(level + 1, next);
   }
   measured.push_back({finest, 0.0, 0.0});
-  // Sampling can find a finer level a hair farther than a coarser one: keep the values monotone.
+  // A finer level can lie a hair farther than a coarser one: keep the values monotone.
   for (std::size_t i = measured.size() - 1; i-- > 0;)
     measured[i].hausdorff = std::max(measured[i].hausdorff, measured[i + 1].hausdorff);
   pm.measured = std::move(measured);
