@@ -146,7 +146,13 @@ double dense_max(const Mesh& from, const Mesh& to, int n) {
 // within the tolerance of its bound, and the bound is no less than the dense search finds.
 void expect_brackets(const Mesh& a, const Mesh& b, const CompareOptions& o, int n) {
   const Comparison c = compare(a, b, o);
-  for (const auto& [d, dense] : {std::pair{c.a_to_b, dense_max(a, b, n)}, std::pair{c.b_to_a, dense_max(b, a, n)}}) {
+  const detail::AabbTree tree_a(a), tree_b(b);
+  for (const auto& [d, dense, from, to] : {std::tuple{c.a_to_b, dense_max(a, b, n), &tree_a, &tree_b},
+                                           std::tuple{c.b_to_a, dense_max(b, a, n), &tree_b, &tree_a}}) {
+    // The maximum is attained where it says: a point of the first surface, that far from the second.
+    EXPECT_LT(from->closest(d.max_at).squared_distance, 1e-24);
+    EXPECT_NEAR(std::sqrt(to->closest(d.max_at).squared_distance), d.max, 1e-12);
+    EXPECT_NEAR((d.max_at - d.max_nearest).norm(), d.max, 1e-12);
     EXPECT_LE(dense, d.max_bound * (1 + 1e-12));
     EXPECT_LE(d.max, d.max_bound);
     if (o.max_splits > 0) {
@@ -179,7 +185,11 @@ TEST(Compare, CertifiesAMaximumBetweenSamples) {
   EXPECT_LE(c.b_to_a.max_bound, c.b_to_a.max * (1 + o.hausdorff_tolerance));
   // With a tolerance of 1e-9 the search closes in on the line itself.
   o.hausdorff_tolerance = 1e-9;
-  EXPECT_NEAR(compare(valley, square, o).b_to_a.max, exact, 1e-9);
+  const DirectedDistance d = compare(valley, square, o).b_to_a;
+  EXPECT_NEAR(d.max, exact, 1e-9);
+  EXPECT_NEAR(d.max_at.x(), 0.0, 1e-6);  // on the valley's line
+  EXPECT_NEAR(d.max_at.z(), 0.2, 1e-12);
+  EXPECT_NEAR(std::abs(d.max_nearest.x()), 0.2 * 0.5 / 1.25, 1e-6);  // the foot on either arm
 }
 
 TEST(Compare, AHoleUnderAFaceIsNotCovered) {

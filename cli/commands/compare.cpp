@@ -18,7 +18,9 @@ struct CompareCliOptions {
 
 nlohmann::json directed_json(const DirectedDistance& d, const Comparison& c) {
   return {{"max", d.max}, {"max_percent", c.percent(d.max)}, {"max_bound", d.max_bound},
-          {"max_bound_percent", c.percent(d.max_bound)}, {"max_queries", d.max_queries}, {"mean", d.mean}, {"mean_percent", c.percent(d.mean)},
+          {"max_bound_percent", c.percent(d.max_bound)}, {"max_queries", d.max_queries},
+          {"max_at", {d.max_at.x(), d.max_at.y(), d.max_at.z()}},
+          {"max_nearest", {d.max_nearest.x(), d.max_nearest.y(), d.max_nearest.z()}}, {"mean", d.mean}, {"mean_percent", c.percent(d.mean)},
           {"rms", d.rms}, {"rms_percent", c.percent(d.rms)}, {"normal_deviation_mean_deg", d.normal_deviation_mean_deg},
           {"normal_deviation_max_deg", d.normal_deviation_max_deg}, {"samples", d.samples}};
 }
@@ -60,6 +62,12 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
             row("  A -> B (max)", c.a_to_b.max);
             row("  B -> A (max)", c.b_to_a.max);
             row("  certified at most", c.hausdorff_bound);
+            // Where the farther one-sided maximum lies: the place to look at first.
+            const bool a_side = c.a_to_b.max >= c.b_to_a.max;
+            const DirectedDistance& worst = a_side ? c.a_to_b : c.b_to_a;
+            fmt::print("{:<22} ({:.6g}, {:.6g}, {:.6g}) on {}, nearest ({:.6g}, {:.6g}, {:.6g}) on {}\n", "  attained at",
+                       worst.max_at.x(), worst.max_at.y(), worst.max_at.z(), a_side ? "A" : "B", worst.max_nearest.x(),
+                       worst.max_nearest.y(), worst.max_nearest.z(), a_side ? "B" : "A");
             row("mean", c.mean);
             row("RMS", c.rms);
             fmt::print("{:<22} {:>14.3f} deg (mean), {:.1f} deg (max)\n", "normal deviation A->B",

@@ -33,6 +33,8 @@ struct CompareOptions {
 struct DirectedDistance {
   double max = 0.0;        ///< one-sided Hausdorff distance: attained at a point of the first surface
   double max_bound = 0.0;  ///< certified: no point of the first surface is farther from the second
+  Eigen::Vector3d max_at = Eigen::Vector3d::Zero();       ///< where `max` is attained, on the first surface
+  Eigen::Vector3d max_nearest = Eigen::Vector3d::Zero();  ///< the point of the second surface nearest it
   long long max_queries = 0;  ///< closest-point queries the certificate took, beyond the samples
   double mean = 0.0;  ///< area-weighted mean distance
   double rms = 0.0;   ///< area-weighted root mean square distance

@@ -151,9 +151,10 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
   const std::vector<Measured> measured = measure(sampled, from, to, tree);
   DirectedDistance d;
   double weight = 0, sum = 0, sum2 = 0, angle_sum = 0;
+  std::uint32_t farthest = 0;
   for (const SampleSet::Sample& s : sampled.samples) {
     const Measured& m = measured[s.point];
-    d.max = std::max(d.max, m.distance);
+    if (m.distance > d.max) d.max = m.distance, farthest = s.point;
     const double w = s.weight;
     // Normals are compared at face samples only: at a vertex or on an edge the nearest face is ambiguous.
     if (w > 0) d.normal_deviation_max_deg = std::max(d.normal_deviation_max_deg, m.angle_deg);
@@ -176,8 +177,11 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
     if (const std::uint32_t p = sampled.vertex_point[v]; p != kNone)
       corner_distance[v] = measured[p].distance, corner_face[v] = measured[p].nearest;
   const detail::MaxDistanceBound bound = detail::bound_max_distance(
-      from, to, tree, corner_distance, corner_face, d.max, {.tolerance = o.hausdorff_tolerance, .max_splits = o.max_splits});
+      from, to, tree, corner_distance, corner_face, d.max, sampled.points[farthest].position,
+      {.tolerance = o.hausdorff_tolerance, .max_splits = o.max_splits});
   d.max = bound.attained;
+  d.max_at = bound.attained_at;
+  d.max_nearest = tree.closest(d.max_at).point;
   d.max_bound = bound.bound;
   d.max_queries = bound.queries;
   return d;

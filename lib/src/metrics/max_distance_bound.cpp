@@ -223,11 +223,16 @@ class Bounder {
 
 MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const AabbTree& tree,
                                     std::span<const double> corner_distance, std::span<const Index> corner_face,
-                                    double attained, const MaxDistanceOptions& options) {
+                                    double attained, const Eigen::Vector3d& attained_at,
+                                    const MaxDistanceOptions& options) {
   Bounder bounder(to, tree);
   double lower = attained;
+  Eigen::Vector3d lower_at = attained_at;
+  auto attain = [&](double d, const Eigen::Vector3d& p) {
+    if (d > lower) lower = d, lower_at = p;
+  };
   for (Index f = 0; f < from.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) lower = std::max(lower, corner_distance[from.triangles(f, k)]);
+    for (int k = 0; k < 3; ++k) attain(corner_distance[from.triangles(f, k)], from.positions.row(from.triangles(f, k)));
   // Rounding leaves bounds a hair above what they bound: below this, a gap is not worth closing.
   const auto box = bounding_box(from);
   const double slack = 1e-9 * (box.isEmpty() ? 1.0 : box.diagonal().norm());
@@ -274,8 +279,9 @@ MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const Aabb
     if (s.centroid_face < 0) {
       // The face nearest the centroid first: where one face of `to` is nearest all of the piece (the
       // same surface, or a parallel one), it makes the bound exact without a split.
-      const auto [d, f] = bounder.measure((s.corner[0] + s.corner[1] + s.corner[2]) / 3.0, s.corner_face[0]);
-      lower = std::max(lower, d);
+      const Eigen::Vector3d centroid = (s.corner[0] + s.corner[1] + s.corner[2]) / 3.0;
+      const auto [d, f] = bounder.measure(centroid, s.corner_face[0]);
+      attain(d, centroid);
       s.centroid_face = f;
       bounder.rate(s, threshold());
       offer(std::move(s));
@@ -287,7 +293,7 @@ MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const Aabb
     for (int k = 0; k < 3; ++k) {
       mid[k] = 0.5 * (s.corner[k] + s.corner[(k + 1) % 3]);
       const auto [d, f] = bounder.measure(mid[k], s.corner_face[k]);
-      lower = std::max(lower, d);
+      attain(d, mid[k]);
       mid_face[k] = f;
     }
     // Three corner triangles and the middle one, which shares its parent's centroid.
@@ -308,6 +314,7 @@ MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const Aabb
     }
   }
   result.attained = lower;
+  result.attained_at = lower_at;
   result.bound = std::max({lower, pruned, heap.empty() ? 0.0 : heap.front().bound});
   result.queries = bounder.queries;
   return result;

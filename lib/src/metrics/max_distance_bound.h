@@ -19,6 +19,7 @@ struct MaxDistanceOptions {
 
 struct MaxDistanceBound {
   double attained = 0;  ///< the distance of a point of `from`: a lower bound of the maximum
+  Eigen::Vector3d attained_at = Eigen::Vector3d::Zero();  ///< that point
   double bound = 0;     ///< no point of `from` is farther from `to` than this
   long long splits = 0;
   long long queries = 0;  ///< closest-point queries made
@@ -26,7 +27,8 @@ struct MaxDistanceBound {
 
 /// The maximum over `from`'s surface of the distance to `to` (whose tree is `tree`). `corner_distance`
 /// and `corner_face`: each vertex of `from`, its distance to `to` and the face of `to` nearest it (a
-/// vertex no face uses is ignored). `attained`: a distance already measured at some point of `from`.
+/// vertex no face uses is ignored). `attained`: a distance already measured at `attained_at`, a point
+/// of `from`.
 ///
 /// Why it is a bound: the distance to any single triangle F is a convex function of the point, so over
 /// a triangle T it peaks at a corner; and the distance to `to` is at most the distance to F. So
@@ -35,6 +37,7 @@ struct MaxDistanceBound {
 /// until it does not (by `tolerance`), largest bound first.
 MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const AabbTree& tree,
                                     std::span<const double> corner_distance, std::span<const Index> corner_face,
-                                    double attained, const MaxDistanceOptions& options = {});
+                                    double attained, const Eigen::Vector3d& attained_at,
+                                    const MaxDistanceOptions& options = {});
 
 }  // namespace lodkit::detail
