@@ -147,7 +147,7 @@ std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh
 }
 
 DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh& to, const detail::AabbTree& tree,
-                          const CompareOptions& o) {
+                          std::span<const std::array<Index, 3>> to_neighbours, const CompareOptions& o) {
   const std::vector<Measured> measured = measure(sampled, from, to, tree);
   DirectedDistance d;
   double weight = 0, sum = 0, sum2 = 0, angle_sum = 0;
@@ -177,7 +177,7 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
     if (const std::uint32_t p = sampled.vertex_point[v]; p != kNone)
       corner_distance[v] = measured[p].distance, corner_face[v] = measured[p].nearest;
   const detail::MaxDistanceBound bound = detail::bound_max_distance(
-      from, to, tree, corner_distance, corner_face, d.max, sampled.points[farthest].position,
+      from, to, tree, to_neighbours, corner_distance, corner_face, d.max, sampled.points[farthest].position,
       {.tolerance = o.hausdorff_tolerance, .max_splits = o.max_splits});
   d.max = bound.attained;
   d.max_at = bound.attained_at;
@@ -214,13 +214,14 @@ struct CompareReference::State {
   CompareOptions options;
   detail::AabbTree tree;
   SampleSet sampled;
+  std::vector<std::array<Index, 3>> neighbours;  // detail::face_neighbours(mesh)
 };
 
 CompareReference::CompareReference(const Mesh& reference, long long face_samples, const CompareOptions& options) {
   if (reference.num_faces() == 0) throw Error("compare: the first mesh has no faces");
   check_samples(face_samples);
   state_ = std::make_unique<State>(State{reference, face_samples, options, detail::AabbTree(reference),
-                                         sample_surface(reference, face_samples)});
+                                         sample_surface(reference, face_samples), detail::face_neighbours(reference)});
 }
 
 CompareReference::~CompareReference() = default;
@@ -234,8 +235,10 @@ Comparison CompareReference::compare(const Mesh& other, std::optional<long long>
   // other's parallel queries.
   DirectedDistance to_other, to_reference;
   tbb::parallel_invoke(
-      [&] { to_other = directed(s.mesh, s.sampled, other, detail::AabbTree(other), s.options); },
-      [&] { to_reference = directed(other, sample_surface(other, other_samples), s.mesh, s.tree, s.options); });
+      [&] { to_other = directed(s.mesh, s.sampled, other, detail::AabbTree(other), detail::face_neighbours(other), s.options); },
+      [&] {
+        to_reference = directed(other, sample_surface(other, other_samples), s.mesh, s.tree, s.neighbours, s.options);
+      });
   return combine(s.mesh, to_other, to_reference);
 }
 
@@ -246,7 +249,7 @@ Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options) 
   check_samples(samples);
   // One direction at a time, so that only one surface's samples are held at once.
   const auto one_way = [&](const Mesh& from, const Mesh& to) {
-    return directed(from, sample_surface(from, samples), to, detail::AabbTree(to), options);
+    return directed(from, sample_surface(from, samples), to, detail::AabbTree(to), detail::face_neighbours(to), options);
   };
   const DirectedDistance a_to_b = one_way(a, b);
   return combine(a, a_to_b, one_way(b, a));

@@ -11,22 +11,7 @@
 #include "metrics/aabb_tree.h"
 
 namespace lodkit::detail {
-namespace {
 
-// A triangle of `from` (a face or a part of one) and what its bound rests on.
-struct Piece {
-  std::array<Eigen::Vector3d, 3> corner;
-  std::array<Index, 3> corner_face;  // the face of `to` nearest each corner
-  Index inherited = -1;              // the face its parent's bound came from
-  Index centroid_face = -1;          // the face of `to` nearest its centroid; -1 until asked
-  Index best = -1;                   // the face its bound comes from
-  double bound = 0;
-};
-
-bool lower_bound_first(const Piece& a, const Piece& b) { return a.bound < b.bound; }
-
-// Across each edge of each face of `to`, the face on the other side (-1 where the edge has not
-// exactly two faces), with positions welded so that seams of attributes do not part it.
 std::vector<std::array<Index, 3>> face_neighbours(const Mesh& to) {
   const Eigen::VectorX<Index> cls = position_classes(to);
   std::vector<std::array<Index, 3>> faces(static_cast<std::size_t>(to.num_faces()));
@@ -45,6 +30,20 @@ std::vector<std::array<Index, 3>> face_neighbours(const Mesh& to) {
   return across;
 }
 
+namespace {
+
+// A triangle of `from` (a face or a part of one) and what its bound rests on.
+struct Piece {
+  std::array<Eigen::Vector3d, 3> corner;
+  std::array<Index, 3> corner_face;  // the face of `to` nearest each corner
+  Index inherited = -1;              // the face its parent's bound came from
+  Index centroid_face = -1;          // the face of `to` nearest its centroid; -1 until asked
+  Index best = -1;                   // the face its bound comes from
+  double bound = 0;
+};
+
+bool lower_bound_first(const Piece& a, const Piece& b) { return a.bound < b.bound; }
+
 // A triangle clipped by three half-planes has at most six corners; rounding could add a few.
 constexpr int kClipCapacity = 9;
 
@@ -61,7 +60,8 @@ double orient(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::V
 
 class Bounder {
  public:
-  Bounder(const Mesh& to, const AabbTree& tree) : to_(to), tree_(tree), across_(face_neighbours(to)) {}
+  Bounder(const Mesh& to, const AabbTree& tree, std::span<const std::array<Index, 3>> across)
+      : to_(to), tree_(tree), across_(across) {}
 
   double distance(Index f, const Eigen::Vector3d& p) const {
     const Eigen::Vector3d q = closest_point_on_triangle(p, to_.positions.row(to_.triangles(f, 0)),
@@ -70,22 +70,20 @@ class Bounder {
     return (q - p).norm();
   }
 
-  // The patch bound, and where that does not settle it (above `enough`), the least, over the candidate
-  // faces, of the farthest corner from the face. (In this order: on a fine mesh against a fine mesh
-  // the patch bound settles nearly every face, which the single faces rarely do.)
+  // The least, over the candidate faces, of the farthest corner from the face (cheap, and exact where
+  // one face is nearest the whole piece); where that does not settle it (above `enough`), the patch
+  // bound too.
   void rate(Piece& s, double enough) const {
-    s.bound = patch_bound(s, std::numeric_limits<double>::infinity());
-    if (s.bound <= enough) return;
     std::array<Index, 5> candidates{s.corner_face[0], s.corner_face[1], s.corner_face[2], s.inherited, s.centroid_face};
-    double single = std::numeric_limits<double>::infinity();
+    s.bound = std::numeric_limits<double>::infinity();
     for (int i = 0; i < 5; ++i) {
       const Index f = candidates[i];
       if (f < 0 || std::find(candidates.begin(), candidates.begin() + i, f) != candidates.begin() + i) continue;
       double farthest = 0;
-      for (int k = 0; k < 3 && farthest < single; ++k) farthest = std::max(farthest, distance(f, s.corner[k]));
-      if (farthest < single) single = farthest, s.best = f;
+      for (int k = 0; k < 3 && farthest < s.bound; ++k) farthest = std::max(farthest, distance(f, s.corner[k]));
+      if (farthest < s.bound) s.bound = farthest, s.best = f;
     }
-    s.bound = std::min(s.bound, single);
+    if (s.bound > enough) s.bound = std::min(s.bound, patch_bound(s, s.bound));
   }
 
   // Seen from the piece's plane, the faces of `to` around it, where they all face the plane's way and
@@ -216,16 +214,17 @@ class Bounder {
 
   const Mesh& to_;
   const AabbTree& tree_;
-  std::vector<std::array<Index, 3>> across_;
+  std::span<const std::array<Index, 3>> across_;
 };
 
 }  // namespace
 
 MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const AabbTree& tree,
+                                    std::span<const std::array<Index, 3>> to_neighbours,
                                     std::span<const double> corner_distance, std::span<const Index> corner_face,
                                     double attained, const Eigen::Vector3d& attained_at,
                                     const MaxDistanceOptions& options) {
-  Bounder bounder(to, tree);
+  Bounder bounder(to, tree, to_neighbours);
   double lower = attained;
   Eigen::Vector3d lower_at = attained_at;
   auto attain = [&](double d, const Eigen::Vector3d& p) {

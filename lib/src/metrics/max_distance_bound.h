@@ -4,7 +4,9 @@
 #include <lodkit/mesh.h>
 
 #include <Eigen/Core>
+#include <array>
 #include <span>
+#include <vector>
 
 namespace lodkit::detail {
 
@@ -25,6 +27,10 @@ struct MaxDistanceBound {
   long long queries = 0;  ///< closest-point queries made
 };
 
+/// Across each edge k (corners k, k + 1) of each face, the face on the other side; -1 where the edge has
+/// not exactly two faces. Positions are welded, so seams of attributes do not part faces.
+std::vector<std::array<Index, 3>> face_neighbours(const Mesh& mesh);
+
 /// The maximum over `from`'s surface of the distance to `to` (whose tree is `tree`). `corner_distance`
 /// and `corner_face`: each vertex of `from`, its distance to `to` and the face of `to` nearest it (a
 /// vertex no face uses is ignored). `attained`: a distance already measured at `attained_at`, a point
@@ -35,7 +41,9 @@ struct MaxDistanceBound {
 /// max over T ≤ max over T's corners of dist(corner, F), for any F. The faces nearest T's corners and
 /// centroid make F's candidates; triangles whose bound exceeds what is attained are split in four
 /// until it does not (by `tolerance`), largest bound first.
+/// `to_neighbours`: face_neighbours(to), found once by a caller that measures many meshes against it.
 MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const AabbTree& tree,
+                                    std::span<const std::array<Index, 3>> to_neighbours,
                                     std::span<const double> corner_distance, std::span<const Index> corner_face,
                                     double attained, const Eigen::Vector3d& attained_at,
                                     const MaxDistanceOptions& options = {});
