@@ -223,6 +223,22 @@ TEST(Compare, AHoleUnderAFaceIsNotCovered) {
   }
 }
 
+TEST(Compare, CertifiesAsCheaplyAgainstAnInsideOutSurface) {
+  // Distances do not depend on which way faces point, and neither does the bound: the faces of the
+  // other surface covering a triangle may all face away from it.
+  const Mesh fine = test::bumpy_sphere(3, 0.05);
+  SimplifyOptions so;
+  so.target_faces = 200;
+  const Mesh coarse = simplify(fine, so).mesh;
+  Mesh inside_out = fine;
+  inside_out.triangles.col(1).swap(inside_out.triangles.col(2));
+  const Comparison straight = compare(coarse, fine), reversed = compare(coarse, inside_out);
+  EXPECT_EQ(straight.hausdorff, reversed.hausdorff);
+  EXPECT_EQ(straight.hausdorff_bound, reversed.hausdorff_bound);
+  EXPECT_EQ(straight.a_to_b.max_queries, reversed.a_to_b.max_queries);
+  EXPECT_EQ(straight.b_to_a.max_queries, reversed.b_to_a.max_queries);
+}
+
 TEST(Compare, BracketsTheMaximumOfASimplifiedSurface) {
   // A bumpy sphere and its simplification, closed and with seams (flat-shaded: three vertices of its
   // own per face), and an open bumpy patch: the bound holds, with no split at all, against a dense

@@ -86,8 +86,9 @@ class Bounder {
     if (s.bound > enough) s.bound = std::min(s.bound, patch_bound(s, s.bound));
   }
 
-  // Seen from the piece's plane, the faces of `to` around it, where they all face the plane's way and
-  // cover the piece with no edge of theirs open: then every point p of the piece has a point of `to`
+  // Seen from the piece's plane, the faces of `to` around it, where they all face one way (the plane's
+  // or all the other: `to` may be oriented either way round) and cover the piece with no edge of theirs
+  // open: then every point p of the piece has a point of `to`
   // straight above or below it, at a height that is affine over each face, so the largest height over
   // the overlap of each face with the piece (at the overlap's corners) bounds the distance from p. It
   // holds however many faces the piece spans, where the single-face bound needs the piece split down to
@@ -113,6 +114,7 @@ class Bounder {
     for (Index f : {s.centroid_face, s.corner_face[0], s.corner_face[1], s.corner_face[2]})
       if (f >= 0 && std::find(queue.begin(), queue.end(), f) == queue.end()) queue.push_back(f);
     double bound = 0, covered_area = 0;
+    double side = 0;  // +1 or -1: the way the first face overlapping the piece faces, which all must
     bool any = false;
     for (std::size_t head = 0; head < queue.size(); ++head) {
       const Index f = queue[head];
@@ -131,7 +133,8 @@ class Bounder {
       }
       const Eigen::Vector3d face_normal = (to_.positions.row(to_.triangles(f, 1)) - to_.positions.row(to_.triangles(f, 0)))
                                               .cross(to_.positions.row(to_.triangles(f, 2)) - to_.positions.row(to_.triangles(f, 0)));
-      if (!(face_area2 > 0) || face_normal.dot(n) < kMinFacing * face_normal.norm()) return inf;
+      if (seed) side = face_area2 > 0 ? 1.0 : -1.0;
+      if (!(side * face_area2 > 0) || side * face_normal.dot(n) < kMinFacing * face_normal.norm()) return inf;
       if (seed) {
         // Restart the search from this face alone: the other seeds count only if reached.
         queue.assign(1, f);
@@ -150,7 +153,7 @@ class Bounder {
         if (std::find(visited.begin(), visited.end(), g) == visited.end()) queue.push_back(g);
       }
     }
-    return any && covered_area > 0 ? bound : inf;
+    return any && side * covered_area > 0 ? bound : inf;
   }
 
   // The distance from p to `to`, and its nearest face.
