@@ -293,7 +293,14 @@ TEST(CliSimplify, InvertedFacesAreAnOptionAndMeasureCountsThem) {
     EXPECT_EQ(r.status, 0) << r.err;
     return nlohmann::json::parse(r.out);
   };
-  EXPECT_EQ(measured("--ratio 0.03")["measured"]["inverted_faces"].get<int>(), 0);  // quadric avoids them
+  const nlohmann::json m = measured("--ratio 0.03")["measured"];
+  EXPECT_EQ(m["inverted_faces"].get<int>(), 0);  // quadric avoids them
+  // The Hausdorff distance comes with its certified bound and the point where it is attained, which
+  // lies within the lens (1 wide, 1/100 thick, about the origin).
+  EXPECT_GE(m["hausdorff_bound"].get<double>(), m["hausdorff"].get<double>());
+  EXPECT_LE(m["hausdorff_bound"].get<double>(), 1.001 * m["hausdorff"].get<double>());
+  ASSERT_EQ(m["hausdorff_at"].size(), 3u);
+  for (const auto& x : m["hausdorff_at"]) EXPECT_LE(std::abs(x.get<double>()), 1.0);
   EXPECT_GT(measured("--ratio 0.03 --method hoppe")["measured"]["inverted_faces"].get<int>(), 0);
   EXPECT_GT(measured("--ratio 0.03 --inverted-faces allow")["measured"]["inverted_faces"].get<int>(), 0);
   EXPECT_EQ(measured("--ratio 0.03 --inverted-faces avoid")["measured"]["inverted_faces"].get<int>(), 0);
