@@ -6,9 +6,10 @@
 // on the other surface with an AABB tree. Mean and RMS are area-weighted over the face samples. The
 // largest distance is certified by branch and bound: the samples give a lower bound; over each
 // triangle the distance is at most its corners' farthest from any one face of the other surface (the
-// distance to a triangle is convex), and triangles whose bound exceeds the lower bound are split until
-// it does not, by `hausdorff_tolerance`. The reported maximum is attained at a point; `max_bound`
-// proves none lies farther.
+// distance to a triangle is convex), or, where the other surface's faces cover it seen from its plane,
+// their largest height over it; triangles whose bound exceeds the lower bound are split until it does
+// not, by `hausdorff_tolerance`. The reported maximum is attained at a point (`max_at`); `max_bound`
+// proves none lies farther (src/metrics/max_distance_bound.cpp).
 // Parallel with TBB; every sample's result is stored by index and reduced in order, so the answer is
 // identical for any thread count.
 #include <lodkit/mesh.h>
