@@ -219,7 +219,9 @@ TEST(Compare, AHoleUnderAFaceIsNotCovered) {
     const Comparison c = compare(square, holed, o);
     EXPECT_LE(c.a_to_b.max, exact * (1 + 1e-12));
     EXPECT_GE(c.a_to_b.max_bound, exact * (1 - 1e-12));
-    if (splits > 0) EXPECT_LE(c.a_to_b.max_bound, c.a_to_b.max * (1 + o.hausdorff_tolerance));
+    if (splits > 0) {
+      EXPECT_LE(c.a_to_b.max_bound, c.a_to_b.max * (1 + o.hausdorff_tolerance));
+    }
   }
 }
 

@@ -63,8 +63,8 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
             row("  B -> A (max)", c.b_to_a.max);
             row("  certified at most", c.hausdorff_bound);
             // Where the farther one-sided maximum lies: the place to look at first.
-            const bool a_side = c.a_to_b.max >= c.b_to_a.max;
-            const DirectedDistance& worst = a_side ? c.a_to_b : c.b_to_a;
+            const DirectedDistance& worst = c.farther();
+            const bool a_side = &worst == &c.a_to_b;
             fmt::print("{:<22} ({:.6g}, {:.6g}, {:.6g}) on {}, nearest ({:.6g}, {:.6g}, {:.6g}) on {}\n", "  attained at",
                        worst.max_at.x(), worst.max_at.y(), worst.max_at.z(), a_side ? "A" : "B", worst.max_nearest.x(),
                        worst.max_nearest.y(), worst.max_nearest.z(), a_side ? "B" : "A");

@@ -95,11 +95,6 @@ std::optional<Measured> measure(const Mesh& input, const Mesh& output) {
 }
 constexpr const char* kNotMeasured = "the output has no faces";
 
-// Where the Hausdorff distance is attained: on the input (input -> output) or on the output.
-Eigen::Vector3d worst_point(const Comparison& c) {
-  return c.a_to_b.max >= c.b_to_a.max ? c.a_to_b.max_at : c.b_to_a.max_at;
-}
-
 // j["measured"], or null and j["not_measured"] when there was nothing to measure.
 void put_measured(nlohmann::json& j, const std::optional<Measured>& m) {
   if (!m) {
@@ -107,7 +102,7 @@ void put_measured(nlohmann::json& j, const std::optional<Measured>& m) {
     return;
   }
   const Comparison& c = m->distances;
-  const Eigen::Vector3d at = worst_point(c);
+  const Eigen::Vector3d& at = c.farther().max_at;  // on the input or on the output
   j["measured"] = {{"hausdorff", c.hausdorff}, {"hausdorff_percent", c.percent(c.hausdorff)},
                    {"hausdorff_at", {at.x(), at.y(), at.z()}},
                    {"hausdorff_bound", c.hausdorff_bound}, {"hausdorff_bound_percent", c.percent(c.hausdorff_bound)}, {"rms", c.rms},
@@ -120,7 +115,7 @@ void print_measured(const std::optional<Measured>& m) {
     return;
   }
   const Comparison& c = m->distances;
-  const Eigen::Vector3d at = worst_point(c);
+  const Eigen::Vector3d& at = c.farther().max_at;  // on the input or on the output
   fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%) at ({:.6g}, {:.6g}, {:.6g}), RMS {:.6g} ({:.4f}%), {} faces facing against the input\n",
              c.hausdorff, c.percent(c.hausdorff), at.x(), at.y(), at.z(), c.rms, c.percent(c.rms), m->inverted_faces);
 }

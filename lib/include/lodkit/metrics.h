@@ -52,6 +52,8 @@ struct Comparison {
   double mean = 0.0;        ///< average of the two means
   double rms = 0.0;         ///< sqrt of the average of the two mean squares
   double diagonal = 0.0;    ///< bounding-box diagonal of A: the reference for percentages
+  /// The direction whose maximum is the Hausdorff distance (A -> B on a tie): its max_at is where to look.
+  const DirectedDistance& farther() const { return a_to_b.max >= b_to_a.max ? a_to_b : b_to_a; }
   double percent(double value) const { return diagonal > 0 ? 100.0 * value / diagonal : 0.0; }
 };
 

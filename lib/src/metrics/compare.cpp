@@ -170,14 +170,12 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
   }
   d.samples = static_cast<long long>(sampled.samples.size());
 
-  // The maximum, bracketed: the samples' largest distance is only a lower bound of it.
-  std::vector<double> corner_distance(sampled.vertex_point.size(), 0.0);
+  // The maximum, bracketed: the samples' largest distance (vertices included) is only a lower bound of it.
   std::vector<Index> corner_face(sampled.vertex_point.size(), -1);
   for (std::size_t v = 0; v < sampled.vertex_point.size(); ++v)
-    if (const std::uint32_t p = sampled.vertex_point[v]; p != kNone)
-      corner_distance[v] = measured[p].distance, corner_face[v] = measured[p].nearest;
+    if (const std::uint32_t p = sampled.vertex_point[v]; p != kNone) corner_face[v] = measured[p].nearest;
   const detail::MaxDistanceBound bound = detail::bound_max_distance(
-      from, to, tree, to_neighbours, corner_distance, corner_face, d.max, sampled.points[farthest].position,
+      from, to, tree, to_neighbours, corner_face, d.max, sampled.points[farthest].position,
       {.tolerance = o.hausdorff_tolerance, .max_splits = o.max_splits});
   d.max = bound.attained;
   d.max_at = bound.attained_at;

@@ -224,7 +224,7 @@ class Bounder {
 
 MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const AabbTree& tree,
                                     std::span<const std::array<Index, 3>> to_neighbours,
-                                    std::span<const double> corner_distance, std::span<const Index> corner_face,
+                                    std::span<const Index> corner_face,
                                     double attained, const Eigen::Vector3d& attained_at,
                                     const MaxDistanceOptions& options) {
   Bounder bounder(to, tree, to_neighbours);
@@ -233,8 +233,6 @@ MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const Aabb
   auto attain = [&](double d, const Eigen::Vector3d& p) {
     if (d > lower) lower = d, lower_at = p;
   };
-  for (Index f = 0; f < from.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) attain(corner_distance[from.triangles(f, k)], from.positions.row(from.triangles(f, k)));
   // Rounding leaves bounds a hair above what they bound: below this, a gap is not worth closing.
   const auto box = bounding_box(from);
   const double slack = 1e-9 * (box.isEmpty() ? 1.0 : box.diagonal().norm());

@@ -31,10 +31,10 @@ struct MaxDistanceBound {
 /// not exactly two faces. Positions are welded, so seams of attributes do not part faces.
 std::vector<std::array<Index, 3>> face_neighbours(const Mesh& mesh);
 
-/// The maximum over `from`'s surface of the distance to `to` (whose tree is `tree`). `corner_distance`
-/// and `corner_face`: each vertex of `from`, its distance to `to` and the face of `to` nearest it (a
-/// vertex no face uses is ignored). `attained`: a distance already measured at `attained_at`, a point
-/// of `from`.
+/// The maximum over `from`'s surface of the distance to `to` (whose tree is `tree`). `corner_face`:
+/// for each vertex of `from`, the face of `to` nearest it (a vertex no face uses is ignored).
+/// `attained`: a distance already measured at `attained_at`, a point of `from`, and no less than any
+/// vertex's distance.
 ///
 /// Why it is a bound: the distance to any single triangle F is a convex function of the point, so over
 /// a triangle T it peaks at a corner; and the distance to `to` is at most the distance to F. So
@@ -44,7 +44,7 @@ std::vector<std::array<Index, 3>> face_neighbours(const Mesh& mesh);
 /// `to_neighbours`: face_neighbours(to), found once by a caller that measures many meshes against it.
 MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const AabbTree& tree,
                                     std::span<const std::array<Index, 3>> to_neighbours,
-                                    std::span<const double> corner_distance, std::span<const Index> corner_face,
+                                    std::span<const Index> corner_face,
                                     double attained, const Eigen::Vector3d& attained_at,
                                     const MaxDistanceOptions& options = {});
 
