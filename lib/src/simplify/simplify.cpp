@@ -86,9 +86,8 @@ std::string to_string(SimplifyMethod method) {
 }
 
 std::optional<SimplifyMethod> parse_method(const std::string& name) {
-  if (name == "quadric") return SimplifyMethod::Quadric;
-  if (name == "hoppe") return SimplifyMethod::Hoppe;
-  if (name == "edge-length") return SimplifyMethod::EdgeLength;
+  for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe, SimplifyMethod::EdgeLength})
+    if (name == to_string(method)) return method;
   return std::nullopt;
 }
 
