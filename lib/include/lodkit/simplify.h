@@ -101,24 +101,24 @@ struct SimplifyOptions {
   /// Hoppe: random points sampled per input face on average (besides the vertices); and the seed. Four
   /// start every neighbourhood past the paper's strongest springs (under 4 points per face), which on
   /// smooth meshes outweigh the distances, grow the stars and slow the run (fertility at 10 %: 18.8 s
-  /// with 1, 2.0 s with 4; docs/benchmarks.md, "Session 21").
+  /// with 1, 2.0 s with 4; docs/benchmarks-log.md, "Session 21").
   double hoppe_points_per_face = 4.0;
   /// Hoppe: of those, how many go on every face, however small (E_dist must see each face of a fine
   /// feature); the rest are spread over the surface by area, so that E_dist stands for the integral of
   /// the squared distance over the input, which RMS measures. Points all per face (1000, as before
   /// session 27) weight the energy by tessellation density, and on CAD parts the large faces hardly
-  /// count (46 shared runs: RMS x0.94 with 2, Hausdorff x1.00; docs/benchmarks.md, "Session 27").
+  /// count (46 shared runs: RMS x0.94 with 2, Hausdorff x1.00; docs/benchmarks-log.md, "Session 27").
   double hoppe_points_on_every_face = 2.0;
   /// Hoppe: the fewest sample points in all (vertices plus random points); smaller meshes get more random
   /// points per face to reach it. With few points per face the paper's spring schedule keeps the springs
   /// strong, and on CAD meshes of long thin triangles they pull vertices off creases (fandisk's RMS at
-  /// 10 %: 0.0158 % with 1 point per face, 0.0028 % with this floor; docs/benchmarks.md, "Session 13").
+  /// 10 %: 0.0158 % with 1 point per face, 0.0028 % with this floor; docs/benchmarks-log.md, "Session 13").
   /// Meshes of about 67k faces and more (the bunny) are not affected. 0 = no floor.
   Index hoppe_min_points = 100000;
   /// Hoppe: input edges whose two faces turn by more than this (degrees) get points along them too,
   /// about one per average edge length (E_dist sees a sharp edge only through the points near it, and
   /// with a few random points per long thin CAD triangle a collapse could bevel it almost for free:
-  /// trimesh_counter at 10 %, Hausdorff 0.174 -> 0.059 %; docs/benchmarks.md, "Session 26"). 180 = none.
+  /// trimesh_counter at 10 %, Hausdorff 0.174 -> 0.059 %; docs/benchmarks-log.md, "Session 26"). 180 = none.
   double hoppe_crease_angle_deg = 60.0;
   std::uint64_t seed = 1;
 

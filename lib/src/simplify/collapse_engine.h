@@ -39,7 +39,7 @@ constexpr Index kMaxLanes = 8;
 // (crossing components) reached 2.99 % Hausdorff instead of 0.92 %, the counter at 1 % 2.44 % instead of
 // 1.13 %. Waiting 4 times keeps allow's errors over the 46 bench runs (geometric means x1.000, x1.007)
 // and leaves no such face on 34 of them (22 with allow); waiting 16 or 64 times, 35 or 36 of them at
-// x1.035 or x1.044 Hausdorff (docs/benchmarks.md, session 30).
+// x1.035 or x1.044 Hausdorff (docs/benchmarks-log.md, session 30).
 constexpr double kInvertedWait = 4.0;
 
 // How many entries whose neighbourhood changed are re-scored at once (wide updates).

@@ -58,7 +58,7 @@ struct Quadric {
     // it does not. The quadric cost used truncated_minimiser_near() before: the same idea with a hard
     // cut, but a trigonometric eigen-solve for 4 in 5 candidates on a scan. The errors were equal or
     // lower on five meshes at five targets each; eps = 1e-6 of the trace was worse on fandisk
-    // (docs/benchmarks.md, "Engine speed-ups, session 9").
+    // (docs/benchmarks-log.md, "Engine speed-ups, session 9").
     Eigen::Matrix3d r = a;
     r.diagonal().array() += regularisation * a.trace();
     out = anchor - r.inverse() * (a * anchor + b());
