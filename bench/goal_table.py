@@ -7,7 +7,9 @@
 For every mesh and target with a `quadric` row, compares it with the peers in the same CSV
 (meshopt, openmesh, cgal; RMS against the quadric peers openmesh and cgal only) and with `hoppe`, and
 prints a Markdown table with the goals each row misses, then the counts:
-  - quadric's Hausdorff below every peer's (and whether its certified bound is below too),
+  - quadric's Hausdorff below every peer's (and whether its certified bound is below too), and below
+    every peer whose output keeps quadric's components and Euler characteristic (quadric keeps the
+    input's; a peer that cut the mesh along its UV seams or closed a handle may well be nearer),
   - quadric's RMS below every quadric peer's,
   - quadric with zero non-manifold edges and zero flipped faces,
   - hoppe's RMS below quadric's.
@@ -38,10 +40,10 @@ def main() -> None:
     for r in rows:
         by_run.setdefault((r["mesh"], int(r["faces_in"]), int(r["target"])), {})[r["method"]] = r
 
-    counts = dict(runs=0, hausdorff=0, certified=0, rms=0, manifold=0, unflipped=0, hoppe=0, hoppe_runs=0)
+    counts = dict(runs=0, hausdorff=0, certified=0, kept=0, rms=0, manifold=0, unflipped=0, hoppe=0, hoppe_runs=0)
     print("| mesh → target | quadric H % | best peer H % | quadric RMS % | best quadric peer RMS % "
-          "| quadric flipped / nm | hoppe RMS % | goals missed |")
-    print("|---|---:|---:|---:|---:|---:|---:|---|")
+          "| quadric flipped / nm | hoppe RMS % | goals missed | peers that changed the topology |")
+    print("|---|---:|---:|---:|---:|---:|---:|---|---|")
     for (mesh, faces_in, target), run in sorted(by_run.items()):
         q = run.get("quadric")
         peers = [run[m] for m in PEERS if m in run]
@@ -59,6 +61,10 @@ def main() -> None:
         else:
             missed.append(f"H vs {peer_h_method}")
         counts["certified"] += bound < peer_h
+        topology = (q["components"], q["euler"])
+        changed = [p for p in peers if (p["components"], p["euler"]) != topology]
+        counts["kept"] += all(h < float(p["hausdorff_pct"]) for p in peers if p not in changed)
+        changed_cell = ", ".join(f"{p['method']} ({p['components']} comp., χ {p['euler']})" for p in changed) or "—"
         if r < peer_r:
             counts["rms"] += 1
         else:
@@ -81,11 +87,13 @@ def main() -> None:
             else:
                 missed.append("hoppe RMS")
         print(f"| {mesh} {faces_in} → {q['faces_out']} | {h:.4f} | {peer_h:.4f} ({peer_h_method}) | {r:.5f} "
-              f"| {peer_r:.5f} ({peer_r_method}) | {flipped} / {nm} | {hoppe_cell} | {', '.join(missed) or '—'} |")
+              f"| {peer_r:.5f} ({peer_r_method}) | {flipped} / {nm} | {hoppe_cell} | {', '.join(missed) or '—'} "
+              f"| {changed_cell} |")
     n = counts["runs"]
     print()
     print(f"- `quadric` Hausdorff below every peer's: {counts['hausdorff']} of {n} "
-          f"(its certified bound below too: {counts['certified']})")
+          f"(its certified bound below too: {counts['certified']}); below every peer that kept the "
+          f"topology: {counts['kept']} of {n}")
     print(f"- `quadric` RMS below every quadric peer's: {counts['rms']} of {n}")
     print(f"- `quadric` with zero non-manifold edges: {counts['manifold']} of {n}; zero flipped faces: "
           f"{counts['unflipped']} of {n}")
