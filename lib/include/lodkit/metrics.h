@@ -81,6 +81,41 @@ class CompareReference {
   std::unique_ptr<State> state_;
 };
 
+/// What HausdorffChecker::check() decided.
+struct HausdorffCheck {
+  /// Proved: every point of each surface lies within the distance asked of the other.
+  bool within = false;
+  /// The largest distance found at an actual point: above the distance asked when not within (unless
+  /// the search ran out of splits, undecided, which counts as not within).
+  double attained = 0.0;
+  Eigen::Vector3d attained_at = Eigen::Vector3d::Zero();  ///< that point, on either surface
+  /// When within: no point of either surface is farther than this from the other (at most the distance asked).
+  double bound = 0.0;
+  long long queries = 0;  ///< closest-point queries made
+};
+
+/// Whether the Hausdorff distance between `reference` and other meshes is at most a given distance,
+/// decided by compare()'s branch and bound without its sampling: each surface's vertices are measured,
+/// then its triangles are split only until every piece is proved within the distance, and the search
+/// stops at the first point found farther. So it answers in a fraction of compare()'s time, and the
+/// answer "within" is a proof. The reference's tree is built once. Keeps a reference to `reference`,
+/// which must outlive it.
+class HausdorffChecker {
+ public:
+  /// `max_splits` per direction: where the search runs out, the answer is "not within" (undecided).
+  /// \throw Error if `reference` has no faces.
+  explicit HausdorffChecker(const Mesh& reference, long long max_splits = 1'000'000);
+  ~HausdorffChecker();
+  HausdorffChecker(const HausdorffChecker&) = delete;
+  HausdorffChecker& operator=(const HausdorffChecker&) = delete;
+  /// \throw Error if `other` has no faces or `distance` is negative or not finite.
+  HausdorffCheck check(const Mesh& other, double distance) const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
 /// Faces of `mesh` whose normal points against the normal of the face of `reference` nearest to
 /// their centroid: the "flipped faces" of simplification benchmarks.
 Index count_flipped_faces(const Mesh& reference, const Mesh& mesh);

@@ -236,9 +236,20 @@ MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const Aabb
   // Rounding leaves bounds a hair above what they bound: below this, a gap is not worth closing.
   const auto box = bounding_box(from);
   const double slack = 1e-9 * (box.isEmpty() ? 1.0 : box.diagonal().norm());
-  auto threshold = [&] { return lower + std::max(options.tolerance * lower, slack); };
+  auto threshold = [&] {
+    return options.at_most ? *options.at_most : lower + std::max(options.tolerance * lower, slack);
+  };
+  // Deciding: a point farther than at_most answers it.
+  auto decided_against = [&] { return options.at_most && lower > *options.at_most; };
   auto settled = [&](double bound) { return bound <= threshold(); };
 
+  if (decided_against()) {
+    MaxDistanceBound result;
+    result.attained = lower;
+    result.bound = std::numeric_limits<double>::infinity();  // none was sought
+    result.attained_at = lower_at;
+    return result;
+  }
   // Every face's bound from its corners' nearest faces, side by side; only those above what is
   // attained go on.
   auto face_piece = [&](Index f) {
@@ -272,7 +283,7 @@ MaxDistanceBound bound_max_distance(const Mesh& from, const Mesh& to, const Aabb
   };
   MaxDistanceBound result;
   while (!heap.empty() && !settled(heap.front().bound)) {
-    if (result.splits >= options.max_splits) break;
+    if (result.splits >= options.max_splits || decided_against()) break;
     std::pop_heap(heap.begin(), heap.end(), lower_bound_first);
     Piece s = std::move(heap.back());
     heap.pop_back();

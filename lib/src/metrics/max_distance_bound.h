@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -17,6 +18,11 @@ struct MaxDistanceOptions {
   double tolerance = 1e-3;
   /// Stop after this many triangle splits, the bound above then as far as it got.
   long long max_splits = 1'000'000;
+  /// A decision instead of a value: whether the maximum is at most this. Pieces are split only until
+  /// their bounds are at most it, and the search stops as soon as a point lies farther (then
+  /// attained > at_most; `bound` is then still an upper bound, infinite if the given `attained` already
+  /// decided it), so it can be far cheaper than bracketing the value; `tolerance` is unused.
+  std::optional<double> at_most{};
 };
 
 struct MaxDistanceBound {

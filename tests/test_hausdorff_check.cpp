@@ -1,0 +1,78 @@
+// HausdorffChecker (a proved yes or a point farther) and simplify_within() built on it.
+#include <gtest/gtest.h>
+#include <lodkit/error.h>
+#include <lodkit/inspect.h>
+#include <lodkit/metrics.h>
+#include <lodkit/primitives.h>
+#include <lodkit/simplify.h>
+
+#include <cmath>
+
+#include "test_util.h"
+
+namespace lodkit {
+namespace {
+
+TEST(HausdorffCheck, DecidesAPlaneAndADisplacedPlaneAtTheirExactDistance) {
+  const Mesh a = make_grid({.size = {2, 1}, .divisions_x = 8, .divisions_y = 4});
+  Mesh b = a;
+  b.positions.col(2).array() += 0.05;
+  const HausdorffChecker checker(a);
+  const HausdorffCheck above = checker.check(b, 0.05 * (1 + 1e-9));
+  EXPECT_TRUE(above.within);
+  EXPECT_LE(above.bound, 0.05 * (1 + 1e-9));
+  EXPECT_NEAR(above.attained, 0.05, 1e-12);
+  const HausdorffCheck below = checker.check(b, 0.05 * (1 - 1e-6));
+  EXPECT_FALSE(below.within);
+  EXPECT_GT(below.attained, 0.05 * (1 - 1e-6));
+}
+
+TEST(HausdorffCheck, AgreesWithCompareOnASimplifiedSurface) {
+  // Its answer brackets compare()'s: a limit just above compare's proved bound passes, and a limit just
+  // below a distance compare attained at a point fails, naming a point farther than the limit. Both
+  // directions are tried: a sphere's simplification lies inside it (its points near the input), while a
+  // patch against a larger plane is far one way only.
+  const Mesh fine = test::bumpy_sphere(3, 0.05);
+  SimplifyOptions o;
+  o.target_ratio = 0.05;
+  const Mesh coarse = simplify(fine, o).mesh;
+  const Comparison c = compare(fine, coarse);
+  const HausdorffChecker checker(fine);
+  const HausdorffCheck yes = checker.check(coarse, c.hausdorff_bound * (1 + 1e-6));
+  EXPECT_TRUE(yes.within);
+  EXPECT_LE(yes.bound, c.hausdorff_bound * (1 + 1e-6));
+  EXPECT_GE(yes.bound, c.hausdorff * (1 - 1e-9));  // no proof goes below a distance attained
+  const HausdorffCheck no = checker.check(coarse, c.hausdorff * (1 - 1e-3));
+  EXPECT_FALSE(no.within);
+  EXPECT_GT(no.attained, c.hausdorff * (1 - 1e-3));
+  EXPECT_LE(no.attained, c.hausdorff_bound);
+
+  const Mesh plane = make_grid({.size = {4, 4}, .divisions_x = 4, .divisions_y = 4});
+  Mesh patch = make_grid({.size = {1, 1}, .divisions_x = 2, .divisions_y = 2});
+  patch.positions.col(2).array() += 0.1;
+  const double far_corner = std::sqrt(2 * 1.5 * 1.5 + 0.01);  // the plane's corners, from the patch
+  for (const bool patch_first : {true, false}) {
+    const HausdorffChecker one(patch_first ? patch : plane);
+    const Mesh& other = patch_first ? plane : patch;
+    EXPECT_TRUE(one.check(other, far_corner * (1 + 1e-9)).within);
+    const HausdorffCheck miss = one.check(other, 1.0);
+    EXPECT_FALSE(miss.within);
+    EXPECT_GT(miss.attained, 1.0);
+  }
+}
+
+TEST(HausdorffCheck, RefusesEmptyMeshesAndBadLimits) {
+  EXPECT_THROW(HausdorffChecker(Mesh{}), Error);
+  const Mesh box = make_box({});
+  const HausdorffChecker checker(box);
+  EXPECT_THROW(checker.check(Mesh{}, 1.0), Error);
+  EXPECT_THROW(checker.check(box, -1.0), Error);
+  EXPECT_THROW(checker.check(box, std::nan("")), Error);
+  // A surface is 0 from itself, up to rounding (a centroid's distance comes out near 1e-17).
+  const HausdorffCheck self = checker.check(box, 1e-12);
+  EXPECT_TRUE(self.within);
+  EXPECT_LE(self.bound, 1e-15);
+}
+
+}  // namespace
+}  // namespace lodkit
