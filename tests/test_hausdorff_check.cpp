@@ -74,5 +74,54 @@ TEST(HausdorffCheck, RefusesEmptyMeshesAndBadLimits) {
   EXPECT_LE(self.bound, 1e-15);
 }
 
+TEST(SimplifyWithin, TheCoarsestLevelFoundIsWithinAndTheNextCoarserIsNot) {
+  const Mesh fine = test::bumpy_sphere(3, 0.05);
+  const double diagonal = bounding_box(fine).diagonal().norm();
+  for (const double percent : {0.2, 1.0, 3.0}) {
+    const double limit = percent / 100 * diagonal;
+    const SimplifyResult r = simplify_within(fine, limit);
+    ASSERT_TRUE(r.within);
+    EXPECT_EQ(r.reason, StopReason::HausdorffLimit) << r.reason_text;
+    EXPECT_LE(r.within->bound, limit);
+    EXPECT_GT(r.within->checks, 0);
+    EXPECT_LT(r.faces_out, fine.num_faces());
+    // Measured independently: within the limit; and the level one collapse coarser lies beyond it.
+    EXPECT_LE(compare(fine, r.mesh).hausdorff, limit);
+    ASSERT_TRUE(r.within->coarser_faces);
+    EXPECT_LT(*r.within->coarser_faces, r.faces_out);
+    EXPECT_GT(r.within->coarser_attained, limit);
+    SimplifyOptions o;
+    o.target_faces = *r.within->coarser_faces;
+    const SimplifyResult coarser = simplify(fine, o);
+    ASSERT_EQ(coarser.faces_out, *r.within->coarser_faces);
+    EXPECT_GT(compare(fine, coarser.mesh).hausdorff_bound, limit);
+    // The output is simplify()'s to the same face count, and keeps the topology.
+    o.target_faces = r.faces_out;
+    const SimplifyResult same = simplify(fine, o);
+    EXPECT_EQ(same.mesh.positions, r.mesh.positions);
+    EXPECT_EQ(same.mesh.triangles, r.mesh.triangles);
+    const MeshReport report = inspect(r.mesh);
+    EXPECT_TRUE(report.closed);
+    EXPECT_EQ(report.euler_characteristic, inspect(fine).euler_characteristic);
+  }
+}
+
+TEST(SimplifyWithin, StopsAtTheTargetOrTheInputAndRefusesBadLimits) {
+  const Mesh fine = test::bumpy_sphere(2, 0.05);
+  // A limit no level exceeds: the target is the output, proved by the collapses' guaranteed bound alone.
+  SimplifyOptions o;
+  o.target_faces = 100;
+  const SimplifyResult generous = simplify_within(fine, 10.0, o);
+  EXPECT_EQ(generous.reason, StopReason::TargetReached) << generous.reason_text;
+  EXPECT_LE(generous.faces_out, 100);
+  EXPECT_LE(generous.within->bound, 10.0);
+  // A limit of 0: only the input itself is 0 from the input.
+  const SimplifyResult none = simplify_within(fine, 0.0);
+  EXPECT_EQ(none.faces_out, fine.num_faces());
+  EXPECT_EQ(none.mesh.positions, fine.positions);
+  EXPECT_THROW(simplify_within(fine, -1.0), Error);
+  EXPECT_THROW(simplify_within(fine, INFINITY), Error);
+}
+
 }  // namespace
 }  // namespace lodkit
