@@ -282,6 +282,35 @@ TEST(CliSimplify, FlatShadedInputNamesAndTakesRecomputeNormals) {
   EXPECT_TRUE(inspect(out).closed);
 }
 
+TEST(CliSimplify, MaxHausdorffIsProvedAndMeasuredBelowTheLimit) {
+  // --max-hausdorff 1%: the output's distance to the input, proved and then measured by compare, is
+  // within 1 % of the diagonal, and the JSON names the next coarser level, farther than that.
+  // --max-error 1% bounds each collapse's estimate only: its output lies farther than 1 % here.
+  test::ScratchDir dir("cli-simplify-within");
+  write_mesh(test::bumpy_sphere(3, 0.05), (dir / "b.ply").string());
+  CliRun r = run(dir, "simplify b.ply -o s.ply --max-hausdorff 1% --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["reason"], "hausdorff-limit");
+  const auto& limit = j["hausdorff_limit"];
+  EXPECT_NEAR(limit["max_distance_percent"].get<double>(), 1.0, 1e-12);
+  EXPECT_LE(limit["bound_percent"].get<double>(), 1.0);
+  EXPECT_GT(limit["coarser_attained_percent"].get<double>(), 1.0);
+  EXPECT_LT(limit["coarser_faces"].get<int>(), j["faces_out"].get<int>());
+  EXPECT_LE(j["measured"]["hausdorff_percent"].get<double>(), 1.0);
+  EXPECT_EQ(read_mesh((dir / "s.ply").string()).num_faces(), j["faces_out"].get<int>());
+  r = run(dir, "simplify b.ply -o e.ply --max-error 1% --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_GT(nlohmann::json::parse(r.out)["measured"]["hausdorff_percent"].get<double>(), 1.0);
+  // Plain text says what was proved; a bad limit or a method without collapses is refused.
+  r = run(dir, "simplify b.ply -o s.ply --max-hausdorff 0.01 --faces 500");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("proved at most"), std::string::npos) << r.err;
+  EXPECT_NE(run(dir, "simplify b.ply -o x.ply --max-hausdorff -1%").status, 0);
+  EXPECT_NE(run(dir, "simplify b.ply -o x.ply --max-hausdorff 1% --method schroeder").status, 0);
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
+}
+
 TEST(CliSimplify, InvertedFacesAreAnOptionAndMeasureCountsThem) {
   // A lens 1/100 as thick as wide: --measure counts the faces facing against the input, which
   // --inverted-faces avoid and refuse leave none of at 3 %. Held to 8 faces, refuse stops short and

@@ -20,7 +20,7 @@ struct SimplifyCliOptions {
   std::string method = "quadric", placement = "optimal";
   std::optional<Index> faces;
   std::optional<double> ratio;
-  std::optional<std::string> max_error;
+  std::optional<std::string> max_error, max_hausdorff;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
   bool measure = false, json = false, recompute_normals = false, no_inverted_faces = false;
   std::optional<std::string> inverted_faces;  // allow|avoid|refuse; unset: by method
@@ -39,9 +39,32 @@ struct SimplifyCliOptions {
 };
 
 // "0.5" is absolute; "0.5%" is a percentage of the bounding-box diagonal.
-double parse_error(const std::string& text, double diagonal) {
-  const LengthArgument error = parse_length(text, "simplify: --max-error");
+double parse_error(const std::string& text, double diagonal, const char* option = "--max-error") {
+  const LengthArgument error = parse_length(text, fmt::format("simplify: {}", option));
   return error.relative ? error.value * diagonal : error.value;
+}
+
+const char* reason_name(StopReason reason) {
+  switch (reason) {
+    case StopReason::TargetReached: return "target";
+    case StopReason::ErrorLimit: return "error-limit";
+    case StopReason::NoLegalCollapse: return "no-legal-collapse";
+    case StopReason::HausdorffLimit: return "hausdorff-limit";
+  }
+  return "unknown";
+}
+
+// --max-hausdorff: the proof behind the output and the level that failed.
+nlohmann::json within_json(const SimplifyResult::HausdorffLimit& w, double pct) {
+  nlohmann::json j{{"max_distance", w.max_distance}, {"max_distance_percent", w.max_distance * pct},
+                   {"bound", w.bound}, {"bound_percent", w.bound * pct}, {"checks", w.checks}};
+  if (w.coarser_faces) {
+    j["coarser_faces"] = *w.coarser_faces;
+    j["coarser_attained"] = w.coarser_attained;
+    j["coarser_attained_percent"] = w.coarser_attained * pct;
+    j["coarser_at"] = {w.coarser_at.x(), w.coarser_at.y(), w.coarser_at.z()};
+  }
+  return j;
 }
 
 // When a rule with an option held edges back, name the option. Faces turning too far: CAD parts stop
@@ -202,7 +225,9 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       if (f >= 1.0) std::fputc('\n', stderr);
     };
 
-  const SimplifyResult r = simplify(mesh, s);
+  const SimplifyResult r = o.max_hausdorff
+                               ? simplify_within(mesh, parse_error(*o.max_hausdorff, diagonal, "--max-hausdorff"), s)
+                               : simplify(mesh, s);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
 
   std::optional<Measured> measured;
@@ -214,12 +239,11 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                      {"faces_in", r.faces_in}, {"faces_out", r.faces_out}, {"vertices_in", r.vertices_in},
                      {"vertices_out", r.vertices_out}, {"target_faces", r.target_faces},
                      {"collapses", r.collapses}, {"seconds", r.seconds}, {"error_estimate", r.error},
-                     {"error_estimate_percent", r.error * pct},
-                     {"reason", r.reason == StopReason::TargetReached ? "target" :
-                                r.reason == StopReason::ErrorLimit ? "error-limit" : "no-legal-collapse"},
+                     {"error_estimate_percent", r.error * pct}, {"reason", reason_name(r.reason)},
                      {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}, {"lanes", r.lanes},
                      {"dropped_degenerate_faces", r.dropped_degenerate_faces}};
-    if (r.reason != StopReason::TargetReached) j["blocked"] = blocked_json(r.blocked);
+    if (r.reason != StopReason::TargetReached && !r.within) j["blocked"] = blocked_json(r.blocked);
+    if (r.within) j["hausdorff_limit"] = within_json(*r.within, pct);
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
     if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
     if (hint) j["hint"] = *hint;
@@ -235,7 +259,11 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     fmt::print(stderr, "simplify ({}): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", o.method,
                thousands(r.faces_in), thousands(r.faces_out), thousands(r.vertices_in), thousands(r.vertices_out),
                r.seconds);
-    fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
+    if (r.within)
+      fmt::print(stderr, "  Hausdorff distance to the input proved at most {:.6g} ({:.4f}%), {} levels checked\n",
+                 r.within->bound, r.within->bound * pct, r.within->checks);
+    else
+      fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
     if (r.lanes > 1) fmt::print(stderr, "  {} slabs simplified side by side, then one queue for the rest\n", r.lanes);
     if (r.dropped_degenerate_faces > 0)
       fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
@@ -266,6 +294,9 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--faces", opt->faces, "Target face count")->check(kNonNegative);
   sub->add_option("--ratio", opt->ratio, "Target as a fraction of the input faces (0-1)")->check(in_range(0.0, 1.0));
   sub->add_option("--max-error", opt->max_error, "Largest error per collapse: a distance, or N% of the diagonal");
+  sub->add_option("--max-hausdorff", opt->max_hausdorff,
+                  "The coarsest result found whose Hausdorff distance to the input is proved at most this: a "
+                  "distance, or N% of the diagonal (levels checked by branch and bound; slower)");
   sub->add_flag("--preserve-boundary", opt->preserve_boundary, "Weight boundary constraint planes 100x higher");
   sub->add_flag("--lock-boundary", opt->lock_boundary, "Never move or remove boundary vertices");
   sub->add_flag("--allow-topology-change", opt->allow_topology_change,
@@ -331,7 +362,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
     refuse_unless(m != "schroeder",
                   {"--placement", "--preserve-boundary", "--lock-boundary", "--allow-topology-change",
                    "--max-normal-change", "--max-total-normal-change", "--crease-weight", "--attribute-weights",
-                   "--lane-faces", "--max-valence", "--inverted-faces", "--no-inverted-faces"},
+                   "--lane-faces", "--max-valence", "--inverted-faces", "--no-inverted-faces", "--max-hausdorff"},
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
     refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",
@@ -339,7 +370,10 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
     refuse_unless(m == "quadric", {"--crease-weight"}, "--method quadric");
   });
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
+--max-error bounds each collapse's error estimate, not the result's distance to the input (often 2-4x more);
+--max-hausdorff bounds that distance, proved, and goes as far as the other limits allow.
 Examples:
+  lodkit simplify scan.ply -o scan_lo.ply --max-hausdorff 0.2% --json
   lodkit simplify bunny.ply -o bunny_10k.ply --faces 10000
   lodkit simplify scan.obj -o scan_small.obj --ratio 0.05 --measure
   lodkit simplify part.stl -o part_lo.stl --max-error 0.1% --lock-boundary
