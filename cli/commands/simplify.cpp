@@ -370,7 +370,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
     refuse_unless(m == "quadric", {"--crease-weight"}, "--method quadric");
   });
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
---max-error bounds each collapse's error estimate, not the result's distance to the input (often 2-4x more);
+--max-error bounds each collapse's error estimate, not the result's distance to the input (often 2-5x more);
 --max-hausdorff bounds that distance, proved, and goes as far as the other limits allow.
 Examples:
   lodkit simplify scan.ply -o scan_lo.ply --max-hausdorff 0.2% --json
