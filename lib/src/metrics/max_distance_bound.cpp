@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <tbb/parallel_for.h>
 #include <vector>
@@ -107,9 +108,13 @@ class Bounder {
     // Slack for rounding in the inside tests, relative to the piece's size.
     const double slack = 1e-12 * (t[1].squaredNorm() + t[2].squaredNorm());
 
-    std::vector<Index>& visited = scratch_visited();
+    // Which faces were visited: stamped with this call's number, not looked up in a list (a piece
+    // spanning a few hundred faces made that list's lookups quadratic: most of a Hausdorff check).
+    Marks& marks = scratch_marks();
+    const std::uint32_t stamp = marks.next(static_cast<std::size_t>(to_.num_faces()));
+    auto visited = [&](Index f) { return marks.stamp[static_cast<std::size_t>(f)] == stamp; };
+    std::size_t visits = 0;
     std::vector<Index>& queue = scratch_queue();
-    visited.clear();
     queue.clear();
     for (Index f : {s.centroid_face, s.corner_face[0], s.corner_face[1], s.corner_face[2]})
       if (f >= 0 && std::find(queue.begin(), queue.end(), f) == queue.end()) queue.push_back(f);
@@ -118,7 +123,7 @@ class Bounder {
     bool any = false;
     for (std::size_t head = 0; head < queue.size(); ++head) {
       const Index f = queue[head];
-      if (std::find(visited.begin(), visited.end(), f) != visited.end()) continue;
+      if (visited(f)) continue;
       std::array<Lifted, 3> c;
       for (int k = 0; k < 3; ++k) c[k] = lift(to_.positions.row(to_.triangles(f, k)));
       const double face_area2 = orient(c[0].at, c[1].at, c[2].at);
@@ -141,8 +146,8 @@ class Bounder {
         head = 0;
         any = true;
       }
-      visited.push_back(f);
-      if (visited.size() > kMaxFaces) return inf;
+      marks.stamp[static_cast<std::size_t>(f)] = stamp;
+      if (++visits > kMaxFaces) return inf;
       for (int i = 0; i < count; ++i) bound = std::max(bound, std::abs(poly[i].height));
       if (bound > give_up) return inf;
       for (int i = 1; i + 1 < count; ++i) covered_area += orient(poly[0].at, poly[i].at, poly[i + 1].at);
@@ -150,7 +155,7 @@ class Bounder {
         if (!segment_meets(c[k].at, c[(k + 1) % 3].at, t, slack)) continue;
         const Index g = across_[f][k];
         if (g < 0) return inf;  // an open or non-manifold edge over the piece: it may not be covered
-        if (std::find(visited.begin(), visited.end(), g) == visited.end()) queue.push_back(g);
+        if (!visited(g)) queue.push_back(g);
       }
     }
     return any && side * covered_area > 0 ? bound : inf;
@@ -206,9 +211,20 @@ class Bounder {
     return lo <= hi;
   }
 
-  static std::vector<Index>& scratch_visited() {
-    thread_local std::vector<Index> v;
-    return v;
+  // Per thread: a stamp per face of `to`, and the last stamp handed out. A stamp is never reused
+  // while the array lives (on wrap-around it is cleared), so no clearing between calls.
+  struct Marks {
+    std::vector<std::uint32_t> stamp;
+    std::uint32_t last = 0;
+    std::uint32_t next(std::size_t faces) {
+      if (stamp.size() < faces) stamp.resize(faces, 0);
+      if (++last == 0) std::fill(stamp.begin(), stamp.end(), 0), last = 1;
+      return last;
+    }
+  };
+  static Marks& scratch_marks() {
+    thread_local Marks m;
+    return m;
   }
   static std::vector<Index>& scratch_queue() {
     thread_local std::vector<Index> v;
