@@ -306,6 +306,23 @@ TEST(CliSimplify, MaxHausdorffIsProvedAndMeasuredBelowTheLimit) {
   r = run(dir, "simplify b.ply -o s.ply --max-hausdorff 0.01 --faces 500");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("proved at most"), std::string::npos) << r.err;
+  // A pixel budget is the distance that projects to that many pixels at the bounding sphere's nearest
+  // point: 1 px at distance 10, 60 degrees, 1080 px.
+  r = run(dir, "simplify b.ply -o p.ply --pixel-error 1 --distance 10 --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  const double radius = 0.5 * bounding_box(test::bumpy_sphere(3, 0.05)).diagonal().norm();
+  const double one_pixel = 2 * (10 - radius) * std::tan(std::numbers::pi / 6) / 1080;
+  EXPECT_NEAR(j["hausdorff_limit"]["max_distance"].get<double>(), one_pixel, 1e-12);
+  EXPECT_LE(j["measured"]["hausdorff"].get<double>(), one_pixel);
+  EXPECT_EQ(j["hausdorff_limit"]["view"]["distance"].get<double>(), 10.0);
+  // Inside the sphere any error can fill the screen: the input comes back, and the run says why.
+  r = run(dir, "simplify b.ply -o p.ply --pixel-error 1 --distance 0.5 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["faces_out"], nlohmann::json::parse(r.out)["faces_in"]);
+  EXPECT_NE(r.err.find("inside the bounding sphere"), std::string::npos) << r.err;
+  EXPECT_EQ(run(dir, "simplify b.ply -o x.ply --distance 10").status, 2);  // needs --pixel-error
+  EXPECT_EQ(run(dir, "simplify b.ply -o x.ply --pixel-error 1 --max-hausdorff 1%").status, 2);
   EXPECT_NE(run(dir, "simplify b.ply -o x.ply --max-hausdorff -1%").status, 0);
   EXPECT_NE(run(dir, "simplify b.ply -o x.ply --max-hausdorff 1% --method schroeder").status, 0);
   EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));

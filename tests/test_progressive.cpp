@@ -115,6 +115,19 @@ TEST(ProgressiveMesh, LevelsEqualSimplifyWithAttributeAwareCosts) {
   expect_identical(extract_level(pm, pm.max_level()).mesh, input, "finest level");
 }
 
+TEST(ProgressiveMesh, APixelBudgetIsTheDistanceThatProjectsToIt) {
+  // object_error_for_pixels() inverts projected_pixels(); inside the sphere no error fits.
+  for (const double pixels : {0.25, 1.0, 3.0}) {
+    const ScreenSpaceBudget view{pixels, 7.0, 45.0, 1440.0};
+    const double error = object_error_for_pixels(2.0, view);
+    EXPECT_NEAR(error, pixels * 2 * 5.0 * std::tan(std::numbers::pi / 8) / 1440.0, 1e-15);
+    EXPECT_NEAR(projected_pixels(error, 2.0, view), pixels, 1e-12);
+  }
+  EXPECT_EQ(object_error_for_pixels(2.0, {1.0, 1.5, 60.0, 1080.0}), 0.0);
+  EXPECT_THROW(object_error_for_pixels(2.0, {-1.0, 10.0, 60.0, 1080.0}), Error);
+  EXPECT_THROW(object_error_for_pixels(2.0, {1.0, 10.0, 0.0, 1080.0}), Error);
+}
+
 TEST(ProgressiveMesh, RandomWalksAgreeWithDirectExtraction) {
   const Mesh input = seamed_sphere();
   ProgressiveOptions o;

@@ -2,6 +2,7 @@
 #include <lodkit/decimate.h>
 #include <lodkit/error.h>
 #include <lodkit/metrics.h>
+#include <lodkit/progressive.h>
 #include <lodkit/simplify.h>
 
 #include <cstdio>
@@ -21,6 +22,9 @@ struct SimplifyCliOptions {
   std::optional<Index> faces;
   std::optional<double> ratio;
   std::optional<std::string> max_error, max_hausdorff;
+  std::optional<double> pixel_error;  // --max-hausdorff from a screen-space budget
+  double distance = ScreenSpaceBudget{}.distance, fov = ScreenSpaceBudget{}.fov_degrees,
+         viewport = ScreenSpaceBudget{}.viewport_pixels;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
   bool measure = false, json = false, recompute_normals = false, no_inverted_faces = false;
   std::optional<std::string> inverted_faces;  // allow|avoid|refuse; unset: by method
@@ -225,9 +229,17 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       if (f >= 1.0) std::fputc('\n', stderr);
     };
 
-  const SimplifyResult r = o.max_hausdorff
-                               ? simplify_within(mesh, parse_error(*o.max_hausdorff, diagonal, "--max-hausdorff"), s)
-                               : simplify(mesh, s);
+  // A pixel budget is a Hausdorff limit: the largest distance that projects to that many pixels at the
+  // nearest point of the bounding sphere (as pm extract --pixel-error measures it).
+  std::optional<double> limit;
+  if (o.max_hausdorff) limit = parse_error(*o.max_hausdorff, diagonal, "--max-hausdorff");
+  if (o.pixel_error) {
+    limit = object_error_for_pixels(0.5 * diagonal, {*o.pixel_error, o.distance, o.fov, o.viewport});
+    if (*limit == 0 && !global.quiet)
+      fmt::print(stderr, "simplify: note: at --distance {:g} the eye is inside the bounding sphere (radius {:.6g}), where "
+                 "any error can fill the screen: the output is the input\n", o.distance, 0.5 * diagonal);
+  }
+  const SimplifyResult r = limit ? simplify_within(mesh, *limit, s) : simplify(mesh, s);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
 
   std::optional<Measured> measured;
@@ -244,6 +256,9 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                      {"dropped_degenerate_faces", r.dropped_degenerate_faces}};
     if (r.reason != StopReason::TargetReached && !r.within) j["blocked"] = blocked_json(r.blocked);
     if (r.within) j["hausdorff_limit"] = within_json(*r.within, pct);
+    if (o.pixel_error)
+      j["hausdorff_limit"]["view"] = {{"pixel_error", *o.pixel_error}, {"distance", o.distance}, {"fov", o.fov},
+                                      {"viewport", o.viewport}};
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
     if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
     if (hint) j["hint"] = *hint;
@@ -294,9 +309,19 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--faces", opt->faces, "Target face count")->check(kNonNegative);
   sub->add_option("--ratio", opt->ratio, "Target as a fraction of the input faces (0-1)")->check(in_range(0.0, 1.0));
   sub->add_option("--max-error", opt->max_error, "Largest error per collapse: a distance, or N% of the diagonal");
-  sub->add_option("--max-hausdorff", opt->max_hausdorff,
+  auto* max_hausdorff = sub->add_option("--max-hausdorff", opt->max_hausdorff,
                   "The coarsest result found whose Hausdorff distance to the input is proved at most this: a "
                   "distance, or N% of the diagonal (levels checked by branch and bound; slower)");
+  auto* pixel_error = sub->add_option("--pixel-error", opt->pixel_error,
+                  "The same limit from a screen-space budget: the distance that projects to this many pixels at "
+                  "--distance, --fov and --viewport")->check(kNonNegative);
+  pixel_error->excludes(max_hausdorff);
+  sub->add_option("--distance", opt->distance, "Eye to bounding-sphere centre (with --pixel-error)")->needs(pixel_error)
+      ->capture_default_str();
+  sub->add_option("--fov", opt->fov, "Vertical field of view, degrees (with --pixel-error)")->needs(pixel_error)
+      ->check(in_range(0.01, 179.99))->capture_default_str();
+  sub->add_option("--viewport", opt->viewport, "Viewport height, pixels (with --pixel-error)")->needs(pixel_error)
+      ->check(kPositive)->capture_default_str();
   sub->add_flag("--preserve-boundary", opt->preserve_boundary, "Weight boundary constraint planes 100x higher");
   sub->add_flag("--lock-boundary", opt->lock_boundary, "Never move or remove boundary vertices");
   sub->add_flag("--allow-topology-change", opt->allow_topology_change,
@@ -362,7 +387,8 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
     refuse_unless(m != "schroeder",
                   {"--placement", "--preserve-boundary", "--lock-boundary", "--allow-topology-change",
                    "--max-normal-change", "--max-total-normal-change", "--crease-weight", "--attribute-weights",
-                   "--lane-faces", "--max-valence", "--inverted-faces", "--no-inverted-faces", "--max-hausdorff"},
+                   "--lane-faces", "--max-valence", "--inverted-faces", "--no-inverted-faces", "--max-hausdorff",
+                   "--pixel-error"},
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
     refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",
@@ -371,9 +397,11 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   });
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
 --max-error bounds each collapse's error estimate, not the result's distance to the input (often 2-5x more);
---max-hausdorff bounds that distance, proved, and goes as far as the other limits allow.
+--max-hausdorff bounds that distance, proved, and goes as far as the other limits allow; --pixel-error sets
+it from what a viewer sees: pixels = distance * viewport / (2 * d * tan(fov / 2)), d = --distance - bounding radius.
 Examples:
   lodkit simplify scan.ply -o scan_lo.ply --max-hausdorff 0.2% --json
+  lodkit simplify scan.ply -o scan_far.ply --pixel-error 1 --distance 20 --fov 60 --viewport 1080
   lodkit simplify bunny.ply -o bunny_10k.ply --faces 10000
   lodkit simplify scan.obj -o scan_small.obj --ratio 0.05 --measure
   lodkit simplify part.stl -o part_lo.stl --max-error 0.1% --lock-boundary

@@ -236,6 +236,10 @@ struct ScreenSpaceBudget {
 /// the eye to the nearest point of the bounding sphere (`radius` around the centre at `distance`).
 /// Infinite when the eye is inside the sphere.
 double projected_pixels(double error, double radius, const ScreenSpaceBudget& view);
+/// The inverse: the largest object-space error that projects to at most view.pixel_error pixels (0 when
+/// the eye is inside the sphere). With simplify_within(), the coarsest mesh proved to look within the
+/// budget: `lodkit simplify --pixel-error`.
+double object_error_for_pixels(double radius, const ScreenSpaceBudget& view);
 
 /// Which error selection goes by: the guaranteed bound, or the measured distance.
 enum class LevelErrorKind { Bound, Measured };

@@ -15,15 +15,33 @@ double bounding_radius(const ProgressiveMesh& pm) {
   return pm.bounds.isEmpty() ? 0.0 : 0.5 * pm.bounds.diagonal().norm();
 }
 
-double projected_pixels(double error, double radius, const ScreenSpaceBudget& view) {
+namespace {
+
+// The object-space length that one pixel spans at the nearest point of the bounding sphere; 0 when the
+// eye is inside it.
+double length_per_pixel(double radius, const ScreenSpaceBudget& view) {
   if (!(view.fov_degrees > 0 && view.fov_degrees < 180))
     throw Error(fmt::format("screen-space budget: field of view must be in (0, 180) degrees, got {}", view.fov_degrees));
   if (!(view.viewport_pixels > 0))
     throw Error(fmt::format("screen-space budget: viewport height must be positive, got {}", view.viewport_pixels));
   if (!std::isfinite(view.distance)) throw Error("screen-space budget: distance must be finite");
   const double d = view.distance - radius;
-  if (!(d > 0)) return error > 0 ? std::numeric_limits<double>::infinity() : 0.0;
-  return error * view.viewport_pixels / (2.0 * d * std::tan(0.5 * view.fov_degrees * std::numbers::pi / 180.0));
+  if (!(d > 0)) return 0.0;
+  return 2.0 * d * std::tan(0.5 * view.fov_degrees * std::numbers::pi / 180.0) / view.viewport_pixels;
+}
+
+}  // namespace
+
+double projected_pixels(double error, double radius, const ScreenSpaceBudget& view) {
+  const double length = length_per_pixel(radius, view);
+  if (!(length > 0)) return error > 0 ? std::numeric_limits<double>::infinity() : 0.0;
+  return error / length;
+}
+
+double object_error_for_pixels(double radius, const ScreenSpaceBudget& view) {
+  if (!(view.pixel_error >= 0) || !std::isfinite(view.pixel_error))
+    throw Error(fmt::format("screen-space budget: pixel error must be finite and not negative, got {}", view.pixel_error));
+  return view.pixel_error * length_per_pixel(radius, view);
 }
 
 Index level_for_faces(const ProgressiveMesh& pm, Index faces) {
