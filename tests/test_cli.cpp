@@ -194,6 +194,34 @@ TEST(CliSimplify, EveryMethodEndToEndWithJsonAndMeasure) {
   EXPECT_NE(compared.out.find("Hausdorff"), std::string::npos);
 }
 
+TEST(CliCompare, WithinDecidesAndExitsByTheAnswer) {
+  // --within E against the full comparison: just above its certified bound, proved within (exit 0);
+  // just below the distance it attained, a point farther is named (exit 3).
+  test::ScratchDir dir("cli-compare-within");
+  write_mesh(test::bumpy_sphere(3, 0.05), (dir / "b.ply").string());
+  ASSERT_EQ(run(dir, "simplify b.ply -o s.ply --ratio 0.05").status, 0);
+  const CliRun full = run(dir, "compare b.ply s.ply --json");
+  ASSERT_EQ(full.status, 0) << full.err;
+  const auto c = nlohmann::json::parse(full.out);
+  const double bound = c["hausdorff_bound"].get<double>(), attained = c["hausdorff"].get<double>();
+  CliRun r = run(dir, fmt::format("compare b.ply s.ply --within {:.17g} --json", bound * (1 + 1e-6)));
+  EXPECT_EQ(r.status, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["within"].get<bool>());
+  EXPECT_LE(j["bound"].get<double>(), bound * (1 + 1e-6));
+  r = run(dir, fmt::format("compare b.ply s.ply --within {:.17g} --json", attained * (1 - 1e-3)));
+  EXPECT_EQ(r.status, 3) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["within"].get<bool>());
+  EXPECT_GT(j["attained"].get<double>(), attained * (1 - 1e-3));
+  EXPECT_FALSE(j.contains("bound"));
+  r = run(dir, "compare b.ply s.ply --within 50%");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("proved"), std::string::npos) << r.out;
+  EXPECT_EQ(run(dir, "compare b.ply s.ply --within 1% --samples 100").status, 2);
+  EXPECT_NE(run(dir, "compare b.ply s.ply --within -1%").status, 0);
+}
+
 TEST(CliSimplify, LanesAreReportedAndCanBeTurnedOff) {
   test::ScratchDir dir("cli-simplify-lanes");
   ASSERT_EQ(run(dir, "generate torus -o t.ply --tolerance 0.0005").status, 0);
