@@ -255,7 +255,10 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                      {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}, {"lanes", r.lanes},
                      {"dropped_degenerate_faces", r.dropped_degenerate_faces}};
     if (r.reason != StopReason::TargetReached && !r.within) j["blocked"] = blocked_json(r.blocked);
-    if (r.within) j["hausdorff_limit"] = within_json(*r.within, pct);
+    if (r.within) {
+      j["hausdorff_limit"] = within_json(*r.within, pct);
+      j.erase("error_estimate"), j.erase("error_estimate_percent");  // not estimated: proved instead
+    }
     if (o.pixel_error)
       j["hausdorff_limit"]["view"] = {{"pixel_error", *o.pixel_error}, {"distance", o.distance}, {"fov", o.fov},
                                       {"viewport", o.viewport}};

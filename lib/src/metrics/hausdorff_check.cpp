@@ -3,6 +3,7 @@
 #include <lodkit/error.h>
 #include <lodkit/metrics.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -32,12 +33,14 @@ HausdorffCheck directed_check(const Mesh& from, const Mesh& to, const detail::Aa
       d2[v] = hit.squared_distance;
     }
   });
-  Index farthest = 0;  // the first of the farthest, for the same answer on any thread count
-  for (Index v = 1; v < n; ++v)
-    if (d2[v] > d2[farthest]) farthest = v;
+  // The first of the farthest used vertices, for the same answer on any thread count.
+  const Index first_used = static_cast<Index>(std::find(used.begin(), used.end(), 1) - used.begin());
+  Index farthest = first_used;
+  for (Index v = first_used + 1; v < n; ++v)
+    if (used[v] && d2[v] > d2[farthest]) farthest = v;
   HausdorffCheck c;
-  const double attained = n > 0 ? std::sqrt(d2[farthest]) : 0.0;
-  const Eigen::Vector3d at = n > 0 ? Eigen::Vector3d(from.positions.row(farthest).transpose()) : Eigen::Vector3d::Zero();
+  const double attained = std::sqrt(d2[farthest]);  // (a mesh with faces has a used vertex)
+  const Eigen::Vector3d at = from.positions.row(farthest).transpose();
   const detail::MaxDistanceBound b = detail::bound_max_distance(
       from, to, tree, to_neighbours, corner_face, attained, at, {.max_splits = max_splits, .at_most = distance});
   c.attained = b.attained;
