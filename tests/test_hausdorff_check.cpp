@@ -7,6 +7,7 @@
 #include <lodkit/simplify.h>
 
 #include <cmath>
+#include <tbb/global_control.h>
 
 #include "test_util.h"
 
@@ -106,6 +107,21 @@ TEST(SimplifyWithin, TheLevelFoundIsWithinAndALevelJustCoarserIsNot) {
     EXPECT_TRUE(report.closed);
     EXPECT_EQ(report.euler_characteristic, inspect(fine).euler_characteristic);
   }
+}
+
+TEST(SimplifyWithin, SameAnswerForAnyThreadCount) {
+  const Mesh fine = test::bumpy_sphere(3, 0.05);
+  const double limit = 0.01 * bounding_box(fine).diagonal().norm();
+  const SimplifyResult many = simplify_within(fine, limit);
+  const SimplifyResult one = [&] {
+    const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    return simplify_within(fine, limit);
+  }();
+  EXPECT_EQ(one.mesh.positions, many.mesh.positions);
+  EXPECT_EQ(one.mesh.triangles, many.mesh.triangles);
+  EXPECT_EQ(one.within->bound, many.within->bound);
+  EXPECT_EQ(one.within->checks, many.within->checks);
+  EXPECT_EQ(one.within->coarser_attained, many.within->coarser_attained);
 }
 
 TEST(SimplifyWithin, StopsAtTheTargetOrTheInputAndRefusesBadLimits) {
