@@ -248,6 +248,16 @@ TEST(ProgressiveMesh, MeasuredLevelsPickWhatAViewerNeeds) {
       EXPECT_GT(level_error(pm, by_measure - 1, LevelErrorKind::Measured), budget);
     }
   }
+  // Whatever the budget, the level chosen is proved within it: a measured level (compare's certified
+  // bound) or one whose guaranteed bound is. A level between two measured ones is never chosen on the
+  // coarser one's value alone, because that level comes first.
+  for (int k = 0; k <= 40; ++k) {
+    const double budget = pm.measured.back().hausdorff * std::pow(1.25, k);
+    const Index chosen = level_for_error(pm, budget, LevelErrorKind::Measured);
+    const bool measured = std::any_of(pm.measured.begin(), pm.measured.end(),
+                                      [&](const LevelMeasurement& m) { return m.level == chosen && m.hausdorff <= budget; });
+    EXPECT_TRUE(measured || pm.level_error[chosen] <= budget || chosen == pm.max_level()) << budget;
+  }
   // A viewer at the distance where the middle measured level's error is one pixel.
   const double radius = bounding_radius(pm), error = pm.measured[pm.measured.size() / 2].hausdorff;
   const ScreenSpaceBudget view{1.0, radius + error * 1080.0 / (2 * std::tan(std::numbers::pi / 6)) * 1.001, 60.0, 1080.0};

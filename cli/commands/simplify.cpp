@@ -354,7 +354,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(in_range(0.0, 1000.0))->capture_default_str();
   sub->add_option("--hoppe-every-face", opt->hoppe_every_face,
                   "hoppe: of those, how many go on every face however small; the rest are spread by area "
-                  "(default 2; 1000: all per face, as before session 27)")
+                  "(default 2; 1000: all per face)")
       ->check(in_range(0.0, 1000.0))->capture_default_str();
   sub->add_option("--hoppe-min-points", opt->hoppe_min_points,
                   "hoppe: the fewest sample points in all; smaller meshes get more per face (0 = no floor)")
