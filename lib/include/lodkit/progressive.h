@@ -255,6 +255,22 @@ Index level_for_faces(const ProgressiveMesh& pm, Index faces);
 Index level_for_error(const ProgressiveMesh& pm, double max_error, LevelErrorKind kind = LevelErrorKind::Bound);
 /// The coarsest level whose error projects to at most view.pixel_error pixels.
 Index level_for_view(const ProgressiveMesh& pm, const ScreenSpaceBudget& view, LevelErrorKind kind = LevelErrorKind::Bound);
+/// A level proved within a Hausdorff limit, and the proof.
+struct ProvedLevel {
+  Index level = 0;
+  SimplifyResult::HausdorffLimit proof;
+};
+
+/// The coarsest level found whose Hausdorff distance to `input` (the mesh `pm` was built from) is proved
+/// at most `max_distance` by branch and bound (HausdorffChecker, lodkit/metrics.h), finer-grained than
+/// level_for_error(): it starts from the level that selection proves within (the guaranteed bound, or a
+/// measured level), gallops up from the base doubling the faces, and bisects between the last level
+/// that failed and the first that passed to 1/256 of the faces. The distance need not grow at every
+/// level, so a coarser level might pass too; the chosen level's bound is proved. simplify_within() and
+/// `lodkit pm extract --prove-with` use it.
+/// \throw Error if `input` does not have the finest level's face count, or for a bad limit.
+ProvedLevel prove_level_within(const ProgressiveMesh& pm, const Mesh& input, double max_distance);
+
 /// The bounding sphere radius used by level_for_view (half the bounding box diagonal).
 double bounding_radius(const ProgressiveMesh& pm);
 

@@ -1,7 +1,7 @@
-// simplify_within(): the coarsest level found of a progressive mesh whose Hausdorff distance to the
-// input is proved within a limit, by a search over the levels with HausdorffChecker.
+// simplify_within(): simplify() to the coarsest level found whose Hausdorff distance to the input is
+// proved within a limit: the collapses recorded as a progressive mesh, its levels searched by
+// prove_level_within().
 #include <lodkit/error.h>
-#include <lodkit/metrics.h>
 #include <lodkit/progressive.h>
 #include <lodkit/simplify.h>
 
@@ -36,43 +36,9 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   po.base_faces = target;
   const ProgressiveMesh pm = build_progressive_mesh(source, po);
 
-  // The answer lies between `lo`, a level that failed (or the base, unchecked), and `hi`, one proved
-  // within: at first the coarsest level whose guaranteed ball bound (ProgressiveMesh::level_error) is
-  // within, usually far too fine. A check costs most where it passes on a fine level (every input face
-  // proved near the level; bisecting down from there took igea_loop1 at 0.1 % 13.9 s instead of 7.9 s),
-  // so the search gallops up from the base, doubling the faces, and bisects between the last level that
-  // failed and the first that passed, to 1/256 of the faces.
-  SimplifyResult::HausdorffLimit within;
-  within.max_distance = max_distance;
-  Index hi = level_for_error(pm, max_distance, LevelErrorKind::Bound);
-  within.bound = pm.level_error[static_cast<std::size_t>(hi)];
-  Index lo = -1;  // no level known to fail yet
-  bool galloping = true;
-  const HausdorffChecker checker(source);
-  PMCursor cursor(pm);
-  // Checks `level`; moves hi or lo there.
-  auto check = [&](Index level) {
-    cursor.go_to(level);
-    ++within.checks;
-    const HausdorffCheck c = checker.check(cursor.extract(VertexOrder::Stream).mesh, max_distance);
-    if (c.within) {
-      hi = level, within.bound = c.bound;
-    } else {
-      lo = level, within.coarser_attained = c.attained, within.coarser_at = c.attained_at;
-    }
-  };
-  if (hi > 0) check(0);  // the base: a generous limit passes there and needs nothing more
-  while (lo >= 0 && hi - lo > 1) {
-    const Index faces_lo = pm.num_faces(lo), faces_hi = pm.num_faces(hi);
-    if (faces_hi - faces_lo <= std::max<Index>(2, faces_hi / 256)) break;
-    Index next = level_for_faces(pm, std::max<Index>(2 * faces_lo, 4));
-    if (next >= hi || !galloping) next = lo + (hi - lo) / 2;
-    if (next <= lo) next = lo + 1;
-    const Index before = hi;
-    check(next);
-    if (hi != before) galloping = false;  // passed: bisect from here on
-  }
-  if (lo >= 0) within.coarser_faces = pm.num_faces(lo);
+  const ProvedLevel proved = prove_level_within(pm, source, max_distance);
+  const Index hi = proved.level;
+  const SimplifyResult::HausdorffLimit& within = proved.proof;
 
   SimplifyResult r;
   ExtractedLevel level = extract_level(pm, hi, VertexOrder::Input);
@@ -85,7 +51,7 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   r.vertices_out = r.mesh.num_vertices();
   r.target_faces = target;
   r.collapses = pm.max_level() - hi;
-  if (lo >= 0) {
+  if (within.coarser_faces) {
     r.reason = StopReason::HausdorffLimit;
     r.reason_text = fmt::format(
         "stopped at {} faces, the coarsest level found within the Hausdorff limit of {:.6g} (proved at most {:.6g}); "
