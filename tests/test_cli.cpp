@@ -3,6 +3,7 @@
 #include <lodkit/inspect.h>
 #include <lodkit/io.h>
 #include <lodkit/metrics.h>
+#include <lodkit/primitives.h>
 
 #include <cmath>
 #include <fmt/format.h>
@@ -530,6 +531,21 @@ TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
   EXPECT_LT(faces_of(seen.out), faces_of(certified.out)) << seen.out << certified.out;
   EXPECT_LE(compare(input, read_mesh(dir / "seen.ply")).hausdorff,
             30.0 * 2 * std::tan(std::numbers::pi / 6) / 1080.0);  // within one pixel at the nearest point
+  // With the input at hand, levels between the measured ones are checked: a level no finer, and proved
+  // (and measured here) within the same pixel.
+  const double one_pixel = (30.0 - 0.5 * bounding_box(input).diagonal().norm()) * 2 * std::tan(std::numbers::pi / 6) / 1080.0;
+  const CliRun proved = run(dir, "pm extract tm.pm -o proved.ply --json --pixel-error 1 --distance 30 --prove-with t.ply");
+  ASSERT_EQ(proved.status, 0) << proved.err;
+  const auto pj = nlohmann::json::parse(proved.out);
+  EXPECT_LE(pj["faces"].get<int>(), faces_of(seen.out)) << proved.out;
+  EXPECT_LE(pj["proved_bound"].get<double>(), one_pixel);
+  EXPECT_GT(pj["checks"].get<int>(), 0);
+  EXPECT_LE(compare(input, read_mesh(dir / "proved.ply")).hausdorff, one_pixel);
+  EXPECT_NE(run(dir, "pm extract tm.pm -o x.ply --faces 100 --prove-with t.ply").status, 0);  // no budget
+  write_mesh(make_box({}), (dir / "other.ply").string());
+  const CliRun wrong = run(dir, "pm extract tm.pm -o x.ply --max-error 0.1 --prove-with other.ply");
+  EXPECT_NE(wrong.status, 0);
+  EXPECT_NE(wrong.err.find("other.ply"), std::string::npos) << wrong.err;
   // A budget met by the bound alone says that a measured stream would do with less; nothing else does.
   const std::string note = "holds no measured errors";
   EXPECT_NE(run(dir, "pm extract t.pm -o b.ply --pixel-error 1 --distance 30").err.find(note), std::string::npos);

@@ -115,6 +115,24 @@ TEST(ProgressiveMesh, LevelsEqualSimplifyWithAttributeAwareCosts) {
   expect_identical(extract_level(pm, pm.max_level()).mesh, input, "finest level");
 }
 
+TEST(ProgressiveMesh, AProvedLevelIsWithinItsLimitAndNoFinerThanSelection) {
+  // prove_level_within() checks levels between the measured ones: its level is never finer than the one
+  // selection picks from the stored distances, and compare() finds it within the limit.
+  const Mesh input = test::bumpy_sphere(3, 0.05);
+  ProgressiveMesh pm = build_progressive_mesh(input);
+  measure_levels(pm, input);
+  const double diagonal = bounding_box(input).diagonal().norm();
+  for (const double percent : {0.3, 1.0, 4.0}) {
+    const double limit = percent / 100 * diagonal;
+    const ProvedLevel p = prove_level_within(pm, input, limit);
+    EXPECT_LE(p.level, level_for_error(pm, limit, LevelErrorKind::Measured)) << percent;
+    EXPECT_LE(p.proof.bound, limit);
+    EXPECT_LE(compare(input, extract_level(pm, p.level).mesh).hausdorff, limit) << percent;
+  }
+  EXPECT_THROW(prove_level_within(pm, make_box({}), 0.01), Error);  // not the input
+  EXPECT_THROW(prove_level_within(pm, input, -1.0), Error);
+}
+
 TEST(ProgressiveMesh, APixelBudgetIsTheDistanceThatProjectsToIt) {
   // object_error_for_pixels() inverts projected_pixels(); inside the sphere no error fits.
   for (const double pixels : {0.25, 1.0, 3.0}) {

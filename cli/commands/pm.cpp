@@ -32,6 +32,7 @@ struct PmCliOptions {
   double distance = 10.0, fov = 60.0, viewport = 1080.0;
   int frames = 0;
   bool input_order = false, certified = false;
+  std::optional<std::string> prove_with;  // extract: the mesh the stream was built from
   std::optional<Index> rows;
 };
 
@@ -197,9 +198,12 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   refuse_to_overwrite(o.output, o.input);  // before reading: fail fast
   const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
   if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
-  // Progressive read: only the blocks the chosen level needs (the input order comes after them all).
+  if (o.prove_with && !o.max_error && !o.pixel_error)
+    throw Error("pm extract: --prove-with needs an error budget: --max-error or --pixel-error");
+  // Progressive read: only the blocks the chosen level needs (the input order comes after them all). A
+  // proof may check any level: it reads them all.
   PmReadOptions ro;
-  if (!o.input_order) {
+  if (!o.input_order && !o.prove_with) {
     ro.max_faces = o.faces;
     ro.max_ratio = o.ratio;
     ro.max_error = o.max_error;
@@ -210,7 +214,26 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   const PmReadResult r = read_pm(o.input, ro);
   warn(r, global);
   std::string why;
-  const Index level = choose_level(o, r, why);
+  Index level = 0;
+  std::optional<SimplifyResult::HausdorffLimit> proof;
+  if (o.prove_with) {
+    // The budget as a distance, then the coarsest level found proved within it against the input.
+    const Mesh input = read_input(*o.prove_with, std::nullopt);
+    if (const Index finest = r.pm.num_faces(r.pm.max_level()) + static_cast<Index>(r.pm.extra_faces.rows());
+        input.num_faces() != finest)
+      throw Error(fmt::format("{}: has {} faces, but the finest level of {} has {}: --prove-with needs the mesh the "
+                              "stream was built from", *o.prove_with, input.num_faces(), o.input, finest));
+    const double budget = o.max_error ? *o.max_error
+                                      : object_error_for_pixels(bounding_radius(r.pm),
+                                                                {*o.pixel_error, o.distance, o.fov, o.viewport});
+    ProvedLevel proved = prove_level_within(r.pm, input, budget);
+    level = proved.level;
+    proof = proved.proof;
+    why = fmt::format("the coarsest level found within a budget of {:.6g} from {}, {} levels checked", budget,
+                      *o.prove_with, proof->checks);
+  } else {
+    level = choose_level(o, r, why);
+  }
   const ExtractedLevel e = extract_level(r.pm, level, o.input_order ? VertexOrder::Input : VertexOrder::Stream);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_output(e.mesh, o.output, o.format, WriteOptions{}, o.input);
@@ -221,15 +244,19 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
     nlohmann::json j{{"file", o.input}, {"output", o.output}, {"level", level}, {"faces", e.mesh.num_faces()},
                      {"vertices", e.mesh.num_vertices()}, {"error_bound", bound}, {"bytes_read", r.bytes_read},
                      {"seconds", seconds}, {"why", why}};
-    if (measured) j["measured_error"] = measured_error;
+    // (Under a proof the level is usually between measured ones, whose borrowed value would only mislead.)
+    if (measured && !proof) j["measured_error"] = measured_error;
+    if (proof) j["proved_bound"] = proof->bound, j["checks"] = proof->checks;
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
     fmt::print(stderr, "pm extract: level {} of {}: {} faces, {} vertices, error bound {:.6g}{} ({}); read {} bytes, {:.1f} ms\n",
                level, r.total_splits, thousands(e.mesh.num_faces()), thousands(e.mesh.num_vertices()), bound,
-               measured ? fmt::format(", measured {:.6g}", measured_error) : "", why,
+               proof ? fmt::format(", proved {:.6g}", proof->bound)
+               : measured ? fmt::format(", measured {:.6g}", measured_error) : "",
+               why,
                thousands(static_cast<long long>(r.bytes_read)), 1000 * seconds);
     // Budgets met by the bound alone usually pick levels far finer than a viewer needs: say so once.
-    if (!measured && (o.pixel_error || o.max_error) && !o.certified)
+    if (!measured && (o.pixel_error || o.max_error) && !o.certified && !o.prove_with)
       fmt::print(stderr, "  note: {} holds no measured errors, so the guaranteed bound chose the level (4-50x the measured "
                          "distance on scanned meshes); streams built with `pm build --measure` meet the budget with "
                          "coarser levels\n",
@@ -334,6 +361,10 @@ Examples:
   extract->add_option("--viewport", opt->viewport, "Viewport height, pixels")->check(kPositive)->capture_default_str();
   extract->add_flag("--input-order", opt->input_order, "Vertices and faces in input order (reads the whole file)");
   extract->add_flag("--certified", opt->certified, "Select by the collapses' own guaranteed bound (4-50x looser) even when the stream has measured errors");
+  extract->add_option("--prove-with", opt->prove_with,
+                      "The mesh the stream was built from: with --max-error or --pixel-error, the level is then the "
+                      "coarsest found whose distance to it is proved within the budget, checking levels between the "
+                      "stored ones (reads the whole file)");
   extract->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   extract->footer(R"(pixels = error * viewport / (2 * d * tan(fov / 2)), d = distance - bounding radius.
 The error is the level's measured distance to the input when the stream was built with --measure
@@ -342,7 +373,8 @@ Only the blocks the chosen level needs are read (all of them with --input-order)
 Examples:
   lodkit pm extract bunny.pm -o bunny_1k.ply --faces 1000
   lodkit pm extract bunny.pm -o half.obj --ratio 0.5 --input-order
-  lodkit pm extract bunny.pm -o far.ply --pixel-error 0.5 --distance 2 --fov 45 --viewport 1440)");
+  lodkit pm extract bunny.pm -o far.ply --pixel-error 0.5 --distance 2 --fov 45 --viewport 1440
+  lodkit pm extract bunny.pm -o seen.ply --pixel-error 1 --distance 2 --prove-with bunny.ply)");
 
   CLI::App* morph = pm->add_subcommand("geomorph", "Blend between two levels (Hoppe's geomorphs)");
   morph->add_option("input", opt->input, "A .pm file")->required();
