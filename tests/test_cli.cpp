@@ -542,6 +542,7 @@ TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
   EXPECT_GT(pj["checks"].get<int>(), 0);
   EXPECT_LE(compare(input, read_mesh(dir / "proved.ply")).hausdorff, one_pixel);
   EXPECT_NE(run(dir, "pm extract tm.pm -o x.ply --faces 100 --prove-with t.ply").status, 0);  // no budget
+  EXPECT_EQ(run(dir, "pm extract tm.pm -o x.ply --max-error 0.1 --prove-with t.ply --certified").status, 2);
   write_mesh(make_box({}), (dir / "other.ply").string());
   const CliRun wrong = run(dir, "pm extract tm.pm -o x.ply --max-error 0.1 --prove-with other.ply");
   EXPECT_NE(wrong.status, 0);

@@ -364,7 +364,8 @@ Examples:
   extract->add_option("--prove-with", opt->prove_with,
                       "The mesh the stream was built from: with --max-error or --pixel-error, the level is then the "
                       "coarsest found whose distance to it is proved within the budget, checking levels between the "
-                      "stored ones (reads the whole file)");
+                      "stored ones (reads the whole file)")
+      ->excludes("--certified");
   extract->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   extract->footer(R"(pixels = error * viewport / (2 * d * tan(fov / 2)), d = distance - bounding radius.
 The error is the level's measured distance to the input when the stream was built with --measure
