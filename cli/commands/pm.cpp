@@ -219,10 +219,9 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   if (o.prove_with) {
     // The budget as a distance, then the coarsest level found proved within it against the input.
     const Mesh input = read_input(*o.prove_with, std::nullopt);
-    if (const Index finest = r.pm.num_faces(r.pm.max_level()) + static_cast<Index>(r.pm.extra_faces.rows());
-        input.num_faces() != finest)
+    if (input.num_faces() != r.pm.source_faces())
       throw Error(fmt::format("{}: has {} faces, but the finest level of {} has {}: --prove-with needs the mesh the "
-                              "stream was built from", *o.prove_with, input.num_faces(), o.input, finest));
+                              "stream was built from", *o.prove_with, input.num_faces(), o.input, r.pm.source_faces()));
     const double budget = o.max_error ? *o.max_error
                                       : object_error_for_pixels(bounding_radius(r.pm),
                                                                 {*o.pixel_error, o.distance, o.fov, o.viewport});

@@ -111,6 +111,8 @@ struct ProgressiveMesh {
     return level == 0 ? base_faces : splits[level - 1].first_face + splits[level - 1].num_faces;
   }
   bool knows_input_order() const { return !wedge_input.empty(); }
+  /// Faces of the mesh this was built from: the finest level's and those kept aside as degenerate.
+  Index source_faces() const { return num_faces(max_level()) + static_cast<Index>(extra_faces.rows()); }
 };
 
 struct ProgressiveOptions {

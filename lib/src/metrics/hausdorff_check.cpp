@@ -47,7 +47,7 @@ HausdorffCheck directed_check(const Mesh& from, const Mesh& to, const detail::Aa
   c.attained_at = b.attained_at;
   c.bound = b.bound;
   c.within = b.bound <= distance;
-  c.queries = b.queries + static_cast<long long>(n);
+  c.queries = b.queries + static_cast<long long>(std::count(used.begin(), used.end(), 1));
   return c;
 }
 

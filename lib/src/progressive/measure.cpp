@@ -14,9 +14,9 @@ void measure_levels(ProgressiveMesh& pm, const Mesh& input, const MeasureLevelsO
   if (!(options.face_factor > 1)) throw Error(fmt::format("measure levels: face factor must exceed 1, got {}", options.face_factor));
   if (options.samples < 0) throw Error(fmt::format("measure levels: sample count must not be negative, got {}", options.samples));
   const Index finest = pm.max_level();
-  if (pm.num_faces(finest) != input.num_faces() - pm.extra_faces.rows())
+  if (input.num_faces() != pm.source_faces())
     throw Error(fmt::format("measure levels: the input has {} faces, the progressive mesh's finest level {}",
-                            input.num_faces(), pm.num_faces(finest) + pm.extra_faces.rows()));
+                            input.num_faces(), pm.source_faces()));
   // The input is sampled, and its tree built, once for every level. A level is sampled as densely as
   // compare() would by default, 10 points per face and at least 10,000, but never more than the input: a coarse level far from
   // a dense input is the slowest kind of query, and 500,000 samples on a handful of faces add nothing.

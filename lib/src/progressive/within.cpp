@@ -13,9 +13,9 @@ namespace lodkit {
 ProvedLevel prove_level_within(const ProgressiveMesh& pm, const Mesh& input, double max_distance) {
   if (!std::isfinite(max_distance) || max_distance < 0)
     throw Error(fmt::format("progressive mesh: the Hausdorff limit must be finite and not negative, got {}", max_distance));
-  if (pm.num_faces(pm.max_level()) != input.num_faces() - pm.extra_faces.rows())
+  if (input.num_faces() != pm.source_faces())
     throw Error(fmt::format("progressive mesh: the input has {} faces, the progressive mesh's finest level {}",
-                            input.num_faces(), pm.num_faces(pm.max_level()) + pm.extra_faces.rows()));
+                            input.num_faces(), pm.source_faces()));
   // The answer lies between `lo`, a level that failed (or the base, unchecked), and `hi`, one proved
   // within: at first the coarsest level the stream's own distances prove within (the guaranteed ball
   // bound, or a measured level's certified distance; see level_for_error()), usually far too fine. A
@@ -27,9 +27,8 @@ ProvedLevel prove_level_within(const ProgressiveMesh& pm, const Mesh& input, dou
   SimplifyResult::HausdorffLimit& proof = out.proof;
   proof.max_distance = max_distance;
   const LevelErrorKind kind = pm.measured.empty() ? LevelErrorKind::Bound : LevelErrorKind::Measured;
-  Index hi = level_for_error(pm, max_distance, kind);
+  Index hi = level_for_error(pm, max_distance, kind);  // (the finest level at worst, 0 from the input)
   proof.bound = level_error(pm, hi, kind);
-  if (proof.bound > max_distance) hi = pm.max_level(), proof.bound = 0;  // nothing within: the input itself
   Index lo = -1;  // no level known to fail yet
   bool galloping = true;
   const HausdorffChecker checker(input);
