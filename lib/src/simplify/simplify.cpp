@@ -8,6 +8,7 @@
 
 #include "core/geometry.h"
 #include "simplify/collapse_engine.h"
+#include "simplify/target.h"
 
 namespace lodkit {
 
@@ -41,11 +42,10 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   if (!(options.hoppe_crease_angle_deg >= 0 && options.hoppe_crease_angle_deg <= 180))
     throw Error(fmt::format("simplify: hoppe's crease angle must be between 0 and 180 degrees, got {}",
                             options.hoppe_crease_angle_deg));
-  Index target = 0;
-  if (!options.target_faces && !options.target_ratio && !options.max_error) target = mesh.num_faces() / 2;
-  if (options.target_faces) target = std::max(target, *options.target_faces);
-  if (options.target_ratio)
-    target = std::max(target, static_cast<Index>(std::llround(*options.target_ratio * mesh.num_faces())));
+  // With no limit at all, half the faces.
+  const Index target = !options.target_faces && !options.target_ratio && !options.max_error
+                           ? mesh.num_faces() / 2
+                           : detail::requested_faces(mesh, options);
   if (options.recompute_normals && options.record_collapses)
     throw Error("simplify: recompute_normals cannot be combined with record_collapses");
   SimplifyResult r;

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <fmt/format.h>
 
+#include "simplify/target.h"
+
 namespace lodkit {
 
 SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const SimplifyOptions& options) {
@@ -29,10 +31,7 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   ProgressiveOptions po;
   po.simplify = options;
   po.simplify.recompute_normals = false;
-  Index target = 0;
-  if (options.target_faces) target = std::max(target, *options.target_faces);
-  if (options.target_ratio)
-    target = std::max(target, static_cast<Index>(std::llround(*options.target_ratio * mesh.num_faces())));
+  const Index target = detail::requested_faces(mesh, options);  // 0: as far as legal collapses go
   po.base_faces = target;
   const ProgressiveMesh pm = build_progressive_mesh(source, po);
 
