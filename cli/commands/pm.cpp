@@ -167,6 +167,9 @@ LevelErrorKind selection_kind(const PmCliOptions& o) {
   return o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;
 }
 
+/// The viewer of --pixel-error, --distance, --fov and --viewport (with --pixel-error given).
+ScreenSpaceBudget view_of(const PmCliOptions& o) { return {*o.pixel_error, o.distance, o.fov, o.viewport}; }
+
 /// The level the selection options ask for, and a sentence saying why.
 Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& why) {
   const ProgressiveMesh& pm = r.pm;
@@ -186,7 +189,7 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
     why = fmt::format("{} at most {}", what, *o.max_error);
     return level_for_error(pm, *o.max_error, kind);
   }
-  const ScreenSpaceBudget view{*o.pixel_error, o.distance, o.fov, o.viewport};
+  const ScreenSpaceBudget view = view_of(o);
   const Index level = level_for_view(pm, view, kind);
   why = fmt::format("{} px budget at distance {}, fov {} deg, {} px viewport: {} projects to {:.3g} px", *o.pixel_error,
                     o.distance, o.fov, o.viewport, what,
@@ -207,7 +210,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
     ro.max_faces = o.faces;
     ro.max_ratio = o.ratio;
     ro.max_error = o.max_error;
-    if (o.pixel_error) ro.view = ScreenSpaceBudget{*o.pixel_error, o.distance, o.fov, o.viewport};
+    if (o.pixel_error) ro.view = view_of(o);
     ro.select_by = selection_kind(o);
   }
   const auto start = std::chrono::steady_clock::now();
@@ -222,9 +225,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
     if (input.num_faces() != r.pm.source_faces())
       throw Error(fmt::format("{}: has {} faces, but the finest level of {} has {}: --prove-with needs the mesh the "
                               "stream was built from", *o.prove_with, input.num_faces(), o.input, r.pm.source_faces()));
-    const double budget = o.max_error ? *o.max_error
-                                      : object_error_for_pixels(bounding_radius(r.pm),
-                                                                {*o.pixel_error, o.distance, o.fov, o.viewport});
+    const double budget = o.max_error ? *o.max_error : object_error_for_pixels(bounding_radius(r.pm), view_of(o));
     ProvedLevel proved = prove_level_within(r.pm, input, budget);
     level = proved.level;
     proof = proved.proof;
