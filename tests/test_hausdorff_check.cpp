@@ -94,11 +94,12 @@ TEST(SimplifyWithin, TheLevelFoundIsWithinAndALevelJustCoarserIsNot) {
     EXPECT_LE(r.faces_out - *r.within->coarser_faces, std::max<Index>(2, r.faces_out / 256));
     EXPECT_GT(r.within->coarser_attained, limit);
     SimplifyOptions o;
+    o.refit_passes = 0;  // the levels checked are the collapses' own, as a progressive mesh keeps them
     o.target_faces = *r.within->coarser_faces;
     const SimplifyResult coarser = simplify(fine, o);
     ASSERT_EQ(coarser.faces_out, *r.within->coarser_faces);
     EXPECT_GT(compare(fine, coarser.mesh).hausdorff_bound, limit);
-    // The output is simplify()'s to the same face count, and keeps the topology.
+    // The output is simplify()'s to the same face count without a refit, and keeps the topology.
     o.target_faces = r.faces_out;
     const SimplifyResult same = simplify(fine, o);
     EXPECT_EQ(same.mesh.positions, r.mesh.positions);

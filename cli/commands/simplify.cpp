@@ -39,6 +39,7 @@ struct SimplifyCliOptions {
   double hoppe_crease_angle = SimplifyOptions{}.hoppe_crease_angle_deg;
   Index lane_faces = -1;  // unset: by method
   Index max_valence = -1;  // unset: by method
+  int refit_passes = -1;   // unset: by method
   double max_total_normal_change = -1;  // unset: by method
 };
 
@@ -220,6 +221,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   s.hoppe_crease_angle_deg = o.hoppe_crease_angle;
   if (o.lane_faces >= 0) s.lane_faces = o.lane_faces;
   if (o.max_valence >= 0) s.max_valence = o.max_valence;
+  if (o.refit_passes >= 0) s.refit_passes = o.refit_passes;
   const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
   if (show_progress)
     s.progress = [](double f) {
@@ -264,6 +266,12 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                                       {"viewport", o.viewport}};
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
     if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
+    if (r.refit)
+      j["refit"] = {{"passes", r.refit->passes}, {"steps", r.refit->steps}, {"moved_vertices", r.refit->moved_vertices},
+                    {"sampled_max_before", r.refit->sampled_max_before},
+                    {"sampled_max_before_percent", r.refit->sampled_max_before * pct},
+                    {"sampled_max_after", r.refit->sampled_max_after},
+                    {"sampled_max_after_percent", r.refit->sampled_max_after * pct}, {"seconds", r.refit->seconds}};
     if (hint) j["hint"] = *hint;
     if (o.measure) put_measured(j, measured);
     if (measured) {
@@ -283,6 +291,9 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     else
       fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
     if (r.lanes > 1) fmt::print(stderr, "  {} slabs simplified side by side, then one queue for the rest\n", r.lanes);
+    if (r.refit)
+      fmt::print(stderr, "  refit: largest sampled distance {:.4f}% -> {:.4f}% in {} steps ({:.3f} s)\n",
+                 r.refit->sampled_max_before * pct, r.refit->sampled_max_after * pct, r.refit->steps, r.refit->seconds);
     if (r.dropped_degenerate_faces > 0)
       fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
                  thousands(r.dropped_degenerate_faces));
@@ -371,6 +382,10 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   "No collapse may leave a vertex with more faces around it than this, unless it had as many before "
                   "(0 = no limit; default 24 for hoppe, which otherwise grows hubs on flat parts; none for the others)")
       ->check(kNonNegative);
+  sub->add_option("--refit-passes", opt->refit_passes,
+                  "After the collapses, fit every vertex to the input at once, towards the largest distances, in this "
+                  "many sampling passes (0 = off; default 10 for quadric on inputs up to 500,000 faces, else 0)")
+      ->check(CLI::Range(0, 1000));
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
   add_inverted_faces_option(sub, opt->inverted_faces);
@@ -390,7 +405,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
     refuse_unless(m != "schroeder",
                   {"--placement", "--preserve-boundary", "--lock-boundary", "--allow-topology-change",
                    "--max-normal-change", "--max-total-normal-change", "--crease-weight", "--attribute-weights",
-                   "--lane-faces", "--max-valence", "--inverted-faces", "--no-inverted-faces", "--max-hausdorff",
+                   "--lane-faces", "--max-valence", "--refit-passes", "--inverted-faces", "--no-inverted-faces", "--max-hausdorff",
                    "--pixel-error"},
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");

@@ -27,6 +27,8 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
       !(*options.max_total_normal_change_deg > 0 && *options.max_total_normal_change_deg <= 180))
     throw Error(fmt::format("simplify: max total normal change must be in (0, 180] degrees, got {}",
                             *options.max_total_normal_change_deg));
+  if (options.refit_passes && *options.refit_passes < 0)
+    throw Error(fmt::format("simplify: refit passes must not be negative, got {}", *options.refit_passes));
   if (options.lane_faces && *options.lane_faces < 0)
     throw Error(fmt::format("simplify: faces per lane must not be negative, got {}", *options.lane_faces));
   if (options.max_valence && *options.max_valence < 0)
@@ -57,6 +59,23 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   } else {
     r = detail::Engine(mesh, options).run(target);
   }
+  const int refit_passes = options.refit_passes.value_or(default_refit_passes(options.method, mesh.num_faces()));
+  if (refit_passes > 0 && !options.record_collapses && options.preserve_topology && r.collapses > 0) {
+    const InvertedFaces inverted = options.inverted_faces.value_or(default_inverted_faces(options.method));
+    // The faces keep within the limits the collapses kept: the same turn from their input faces.
+    const double total_turn =
+        r.turn_limit_relaxed_at ? 90.0
+                                : std::max(options.max_total_normal_change_deg.value_or(default_max_total_normal_change(options.method)),
+                                           options.max_normal_change_deg);
+    r.refit = refit_to_input(mesh, r.mesh,
+                             {.passes = refit_passes,
+                              .max_step_turn_deg = std::min(30.0, options.max_normal_change_deg),
+                              .max_total_turn_deg = total_turn,
+                              .min_triangle_quality = options.min_triangle_quality,
+                              .avoid_inverted = inverted != InvertedFaces::Allow,
+                              .fix_boundary = options.lock_boundary},
+                             r.face_origin);
+  }
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
@@ -67,6 +86,10 @@ int attribute_values_per_vertex(const Mesh& mesh) {
 }
 
 Index default_lane_faces(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 8000 : 125000; }
+
+int default_refit_passes(SimplifyMethod method, Index input_faces) {
+  return method == SimplifyMethod::Quadric && input_faces <= 500'000 ? 10 : 0;
+}
 
 Index default_max_valence(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 24 : 0; }
 

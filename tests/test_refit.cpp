@@ -1,0 +1,176 @@
+// refit_to_input(): a simplification's vertices fitted to its input, with nothing else changed.
+#include <gtest/gtest.h>
+#include <lodkit/error.h>
+#include <lodkit/inspect.h>
+#include <lodkit/metrics.h>
+#include <lodkit/primitives.h>
+#include <lodkit/simplify.h>
+
+#include <map>
+#include <tbb/global_control.h>
+
+#include "test_util.h"
+
+namespace lodkit {
+namespace {
+
+SimplifyResult unrefit(const Mesh& mesh, double ratio) {
+  SimplifyOptions o;
+  o.target_ratio = ratio;
+  o.refit_passes = 0;
+  return simplify(mesh, o);
+}
+
+TEST(Refit, LowersTheCertifiedHausdorffDistanceAndKeepsEverythingButPositions) {
+  for (const Mesh& fine : {test::bumpy_sphere(5, 0.03), make_torus({.major_segments = 128, .minor_segments = 48})}) {
+    for (const double ratio : {0.05, 0.01}) {
+      SCOPED_TRACE(ratio);
+      const SimplifyResult coarse = unrefit(fine, ratio);
+      Mesh refit = coarse.mesh;
+      const RefitReport report = refit_to_input(fine, refit, {}, coarse.face_origin);
+      EXPECT_GT(report.steps, 0);
+      EXPECT_LT(report.sampled_max_after, report.sampled_max_before);
+      EXPECT_GT(report.moved_vertices, 0);
+      const Comparison before = compare(fine, coarse.mesh), after = compare(fine, refit);
+      // Certified, not sampled: the largest distance anywhere on either surface went down.
+      EXPECT_LT(after.hausdorff_bound, 0.9 * before.hausdorff);
+      EXPECT_LT(after.rms, before.rms);
+      // Only positions changed: same faces, same attributes, same topology, nothing flipped.
+      EXPECT_EQ(refit.triangles, coarse.mesh.triangles);
+      EXPECT_EQ(refit.num_vertices(), coarse.mesh.num_vertices());
+      const MeshReport a = inspect(refit), b = inspect(coarse.mesh);
+      EXPECT_TRUE(a.manifold);
+      EXPECT_EQ(a.euler_characteristic, b.euler_characteristic);
+      EXPECT_EQ(a.degenerate_faces, 0);
+      EXPECT_EQ(count_flipped_faces(fine, refit), 0);
+    }
+  }
+}
+
+TEST(Refit, SimplifyRunsItByDefaultForQuadricAndReportsIt) {
+  const Mesh fine = test::bumpy_sphere(5, 0.03);
+  SimplifyOptions o;
+  o.target_ratio = 0.02;
+  const SimplifyResult r = simplify(fine, o);
+  ASSERT_TRUE(r.refit);
+  EXPECT_EQ(r.refit->passes, default_refit_passes(SimplifyMethod::Quadric, fine.num_faces()));
+  EXPECT_LT(r.refit->sampled_max_after, r.refit->sampled_max_before);
+  const SimplifyResult without = unrefit(fine, 0.02);
+  EXPECT_FALSE(without.refit);
+  EXPECT_EQ(r.mesh.triangles, without.mesh.triangles);
+  EXPECT_LT(compare(fine, r.mesh).hausdorff_bound, compare(fine, without.mesh).hausdorff);
+  // Off by default where it is not wanted: hoppe, edge-length, large inputs, recorded collapses.
+  EXPECT_EQ(default_refit_passes(SimplifyMethod::Hoppe, 1000), 0);
+  EXPECT_EQ(default_refit_passes(SimplifyMethod::EdgeLength, 1000), 0);
+  EXPECT_EQ(default_refit_passes(SimplifyMethod::Quadric, 1'000'000), 0);
+  o.record_collapses = true;
+  EXPECT_FALSE(simplify(fine, o).refit);
+}
+
+TEST(Refit, SeamsStayClosedAndALockedBoundaryStaysPut) {
+  // Vertices split by a UV seam share a position before, and still do after.
+  const Mesh sphere = make_uv_sphere({.segments = 64, .rings = 32, .uvs = true});
+  SimplifyOptions o;
+  o.target_ratio = 0.05;
+  const SimplifyResult r = simplify(sphere, o);
+  ASSERT_TRUE(r.refit && r.refit->moved_vertices > 0);
+  const SimplifyResult before = unrefit(sphere, 0.05);
+  std::map<std::array<double, 3>, std::vector<Index>> by_position;
+  for (Index v = 0; v < before.mesh.num_vertices(); ++v)
+    by_position[{before.mesh.positions(v, 0), before.mesh.positions(v, 1), before.mesh.positions(v, 2)}].push_back(v);
+  Index shared = 0;
+  for (const auto& [position, vertices] : by_position)
+    for (const Index v : vertices) {
+      shared += vertices.size() > 1;
+      EXPECT_EQ(r.mesh.positions.row(v), r.mesh.positions.row(vertices.front()));
+    }
+  EXPECT_GT(shared, 0);
+  EXPECT_TRUE(inspect(r.mesh).closed);
+
+  // A locked boundary does not move in the refit either.
+  Mesh grid = make_grid({.divisions_x = 40, .divisions_y = 40});
+  for (Index v = 0; v < grid.num_vertices(); ++v)
+    grid.positions(v, 2) = 0.05 * std::sin(7 * grid.positions(v, 0)) * std::cos(5 * grid.positions(v, 1));
+  SimplifyOptions locked;
+  locked.target_ratio = 0.1;
+  locked.lock_boundary = true;
+  const SimplifyResult l = simplify(grid, locked);
+  ASSERT_TRUE(l.refit && l.refit->moved_vertices > 0);
+  locked.refit_passes = 0;
+  const SimplifyResult l0 = simplify(grid, locked);
+  const MeshReport report = inspect(l.mesh);
+  EXPECT_EQ(report.boundary_edges, inspect(l0.mesh).boundary_edges);
+  Index boundary_vertices = 0;
+  for (Index v = 0; v < l0.mesh.num_vertices(); ++v) {
+    const double x = l0.mesh.positions(v, 0), y = l0.mesh.positions(v, 1);
+    const bool on_boundary = std::abs(std::abs(x) - 0.5) < 1e-12 || std::abs(std::abs(y) - 0.5) < 1e-12;
+    if (!on_boundary) continue;
+    ++boundary_vertices;
+    EXPECT_EQ(l.mesh.positions.row(v), l0.mesh.positions.row(v));
+  }
+  EXPECT_EQ(boundary_vertices, 160);
+}
+
+TEST(Refit, AnExactSimplificationStaysExact) {
+  // A finely tessellated cube simplifies to its 12 triangles with zero error: nothing to fit.
+  const Mesh cube = make_box({.divisions = 8});
+  SimplifyOptions o;
+  o.target_faces = 12;
+  const SimplifyResult r = simplify(cube, o);
+  ASSERT_EQ(r.faces_out, 12);
+  ASSERT_TRUE(r.refit);
+  EXPECT_LT(r.refit->sampled_max_before, 1e-12);  // rounding of the quadrics' solve at most
+  EXPECT_LE(r.refit->sampled_max_after, r.refit->sampled_max_before);
+  EXPECT_LT(compare(cube, r.mesh).hausdorff, 1e-9);
+  ASSERT_TRUE(inspect(r.mesh).volume);
+  EXPECT_NEAR(*inspect(r.mesh).volume, 1.0, 1e-9);
+}
+
+TEST(Refit, SameResultForAnyNumberOfThreads) {
+  const Mesh fine = test::bumpy_sphere(4, 0.04);
+  const SimplifyResult coarse = unrefit(fine, 0.05);
+  Mesh one = coarse.mesh, many = coarse.mesh;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    refit_to_input(fine, one, {}, coarse.face_origin);
+  }
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
+  refit_to_input(fine, many, {}, coarse.face_origin);
+  EXPECT_EQ(one.positions, many.positions);
+}
+
+TEST(Refit, NoFaceComesToFaceAgainstTheInputOnAThinLens) {
+  // A coarse face of a thin lens lies nearer the far side than its own; moving it must not turn it
+  // against the side it comes nearest.
+  const Mesh lens = test::thin_lens();
+  for (const double ratio : {0.05, 0.01}) {
+    SCOPED_TRACE(ratio);
+    const SimplifyResult before = unrefit(lens, ratio);
+    SimplifyOptions o;
+    o.target_ratio = ratio;
+    const SimplifyResult after = simplify(lens, o);
+    ASSERT_TRUE(after.refit);
+    EXPECT_LE(count_flipped_faces(lens, after.mesh), count_flipped_faces(lens, before.mesh));
+  }
+}
+
+TEST(Refit, BadOptionsAreErrors) {
+  const Mesh fine = test::bumpy_sphere(2, 0.03);
+  Mesh coarse = unrefit(fine, 0.3).mesh;
+  EXPECT_THROW(refit_to_input(fine, coarse, {.passes = -1}), Error);
+  EXPECT_THROW(refit_to_input(fine, coarse, {.step = 0}), Error);
+  EXPECT_THROW(refit_to_input(fine, coarse, {.step = 1.5}), Error);
+  EXPECT_THROW(refit_to_input(fine, coarse, {.exponent = -1}), Error);
+  const std::vector<Index> too_few(3, 0);
+  EXPECT_THROW(refit_to_input(fine, coarse, {}, too_few), Error);
+  SimplifyOptions o;
+  o.refit_passes = -2;
+  EXPECT_THROW(simplify(fine, o), Error);
+  // Zero passes change nothing.
+  const Mesh copy = coarse;
+  refit_to_input(fine, coarse, {.passes = 0});
+  EXPECT_EQ(coarse.positions, copy.positions);
+}
+
+}  // namespace
+}  // namespace lodkit
