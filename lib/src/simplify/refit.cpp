@@ -111,7 +111,7 @@ class Refitter {
       if (pass == 0) report.sampled_max_before = sampled_max;
       if (sampled_max < best_max) {
         best_max = sampled_max, best = points_, report.steps += pass > 0;
-        if (sampled_max == 0) break;
+        if (sampled_max == 0 || pass + 1 == o_.passes) break;
         solve(sampled_max, step);
         if (pass > 0) scale = std::min(1.0, scale * kGrow);
       } else {
@@ -249,6 +249,7 @@ class Refitter {
       if (fixed_[p] || !(trace > 0)) continue;
       // Regularised: directions no sample constrains (along a flat surface) stay put.
       step[p] = (normal_matrix[p] + 1e-3 * trace * Eigen::Matrix3d::Identity()).ldlt().solve(rhs[p]);
+      if (!step[p].allFinite()) step[p].setZero();  // (huge or tiny coordinates)
       // No farther than its farthest sample: a poorly constrained solve can ask for far more.
       if (const double length = step[p].norm(); length > farthest[p]) step[p] *= farthest[p] / length;
     }
