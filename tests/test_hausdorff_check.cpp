@@ -62,6 +62,35 @@ TEST(HausdorffCheck, AgreesWithCompareOnASimplifiedSurface) {
   }
 }
 
+TEST(SimplifyWithin, RefitLevelsGoCoarserAndStayProvedWithin) {
+  // By default (quadric) the levels are refit before they are checked: the output has no more faces
+  // than the collapses' own level, is proved and measured within the limit, and a refit level at most
+  // 1/16 of its faces coarser was checked and failed.
+  const Mesh fine = test::bumpy_sphere(4, 0.04);
+  const double diagonal = bounding_box(fine).diagonal().norm();
+  SimplifyOptions unrefit;
+  unrefit.refit_passes = 0;
+  for (const double percent : {0.3, 1.0}) {
+    SCOPED_TRACE(percent);
+    const double limit = percent / 100 * diagonal;
+    const SimplifyResult r = simplify_within(fine, limit);
+    const SimplifyResult plain = simplify_within(fine, limit, unrefit);
+    ASSERT_TRUE(r.within && r.refit);
+    EXPECT_LT(r.faces_out, plain.faces_out);
+    EXPECT_LE(r.within->bound, limit);
+    const Comparison c = compare(fine, r.mesh);
+    EXPECT_LE(c.hausdorff, limit);
+    ASSERT_TRUE(r.within->coarser_faces);
+    EXPECT_LT(*r.within->coarser_faces, r.faces_out);
+    EXPECT_LE(r.faces_out - *r.within->coarser_faces, std::max<Index>(2, r.faces_out / 16));
+    EXPECT_GT(r.within->coarser_attained, limit);
+    const MeshReport report = inspect(r.mesh);
+    EXPECT_TRUE(report.closed);
+    EXPECT_EQ(report.euler_characteristic, inspect(fine).euler_characteristic);
+    EXPECT_EQ(count_flipped_faces(fine, r.mesh), 0);
+  }
+}
+
 TEST(HausdorffCheck, RefusesEmptyMeshesAndBadLimits) {
   EXPECT_THROW(HausdorffChecker(Mesh{}), Error);
   const Mesh box = make_box({});
@@ -76,11 +105,15 @@ TEST(HausdorffCheck, RefusesEmptyMeshesAndBadLimits) {
 }
 
 TEST(SimplifyWithin, TheLevelFoundIsWithinAndALevelJustCoarserIsNot) {
+  // The collapses' own levels (no refit): the search over the progressive mesh.
   const Mesh fine = test::bumpy_sphere(3, 0.05);
   const double diagonal = bounding_box(fine).diagonal().norm();
+  SimplifyOptions unrefit;
+  unrefit.refit_passes = 0;
   for (const double percent : {0.2, 1.0, 3.0}) {
     const double limit = percent / 100 * diagonal;
-    const SimplifyResult r = simplify_within(fine, limit);
+    const SimplifyResult r = simplify_within(fine, limit, unrefit);
+    EXPECT_FALSE(r.refit);
     ASSERT_TRUE(r.within);
     EXPECT_EQ(r.reason, StopReason::HausdorffLimit) << r.reason_text;
     EXPECT_LE(r.within->bound, limit);

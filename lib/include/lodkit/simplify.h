@@ -272,12 +272,15 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options = {});
 /// down to the target (target_faces, target_ratio, max_error; by default as far as legal collapses go);
 /// its levels are then checked by branch and bound (HausdorffChecker, lodkit/metrics.h): up from the
 /// base, doubling the faces, then bisecting between the last level that failed and the first that
-/// passed until they are 1/256 of the faces apart. The output is the level that passed; the distance
-/// need not grow at every collapse, so a coarser level might pass too, but the output's own bound is
-/// proved (result.within). The output equals simplify() with refit_passes = 0 to the same face count
-/// (the refit is not run here), except on meshes large enough for lanes (see lane_faces), whose
-/// progressive mesh runs one queue. Slower than simplify(): the
-/// bunny (69k faces) takes 2.4-4 times as long, igea_loop1 (1M) 6.5-8 s. `error` is not estimated here (0).
+/// passed until they are 1/256 of the faces apart. Where simplify() would refit (refit_passes,
+/// default_refit_passes()), refit levels are then checked down from the one found, halving the faces
+/// until one fails, then bisecting to 1/16 of the faces, and the output is the coarsest refit level
+/// that passed (result.refit says so). The distance need not grow at every collapse, so a coarser level might pass
+/// too, but the output's own bound is proved (result.within). Unrefit, the output equals simplify()
+/// with refit_passes = 0 to the same face count, except on meshes large enough for lanes (see
+/// lane_faces), whose progressive mesh runs one queue. Slower than simplify(): the bunny (69k faces)
+/// takes 2.8-6.3 s with the refit search (0.5-0.8 s without), igea_loop1 (1M, no refit) 6.5-8 s. `error` is
+/// not estimated here (0).
 /// \throw Error for an invalid mesh or options, or a negative or non-finite `max_distance`.
 SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const SimplifyOptions& options = {});
 

@@ -33,7 +33,7 @@
 #include <span>
 #include <unordered_map>
 
-#include "metrics/aabb_tree.h"
+#include "simplify/refit_input.h"
 
 namespace lodkit {
 namespace {
@@ -71,26 +71,25 @@ struct Pull {
 
 class Refitter {
  public:
-  Refitter(const Mesh& input, Mesh& output, std::span<const Index> face_origin, const RefitOptions& options)
-      : output_(output), o_(options), input_tree_(input) {
+  Refitter(const detail::RefitInput& input, Mesh& output, std::span<const Index> face_origin, const RefitOptions& options)
+      : output_(output), o_(options), input_tree_(input.tree), input_samples_(input.samples) {
     weld_output();
     // Each face's reference orientation: its input face's where known, else its own before the refit.
+    const Mesh& in = input.mesh;
     reference_.resize(corners_.size());
     for (std::size_t f = 0; f < corners_.size(); ++f) {
-      const bool known = f < face_origin.size() && face_origin[f] >= 0 && face_origin[f] < input.num_faces();
+      const bool known = f < face_origin.size() && face_origin[f] >= 0 && face_origin[f] < in.num_faces();
       const Index g = known ? face_origin[f] : -1;
-      reference_[f] = known ? Vec((input.positions.row(input.triangles(g, 1)) - input.positions.row(input.triangles(g, 0)))
-                                      .cross(input.positions.row(input.triangles(g, 2)) - input.positions.row(input.triangles(g, 0)))
+      reference_[f] = known ? Vec((in.positions.row(in.triangles(g, 1)) - in.positions.row(in.triangles(g, 0)))
+                                      .cross(in.positions.row(in.triangles(g, 2)) - in.positions.row(in.triangles(g, 0)))
                                       .transpose())
                             : normal(static_cast<Index>(f));
     }
     find_fixed_points();
-    if (o_.avoid_inverted) input_tree_.prepare_facing();
-    sample_input(input);
     // Output samples: a barycentric grid of n steps a side, n so that the output has about half as many
     // samples as the input has faces (a coarse face stands for many input faces), within [2, 12]. Twice
     // as many changed the errors by under 1 % on the shared meshes (docs/benchmarks-log.md, "Session 35").
-    const double ratio = static_cast<double>(input.num_faces()) / std::max<Index>(1, output.num_faces());
+    const double ratio = static_cast<double>(in.num_faces()) / std::max<Index>(1, output.num_faces());
     const int n = std::clamp(static_cast<int>(std::ceil(std::sqrt(ratio))), 2, 12);
     for (int i = 0; i <= n; ++i)
       for (int j = 0; i + j <= n; ++j) grid_.push_back(Vec(i, j, n - i - j) / n);
@@ -152,30 +151,6 @@ class Refitter {
       for (int k = 0; k < 3; ++k) ++edge_faces[edge_key(c[k], c[(k + 1) % 3])];
     for (const auto& [edge, faces] : edge_faces)
       if (faces > 2 || (faces == 1 && o_.fix_boundary)) fixed_[edge >> 32] = fixed_[edge & 0xffffffffu] = true;
-  }
-
-  // The input's points (once per position; vertices no face uses are not part of the surface) and its
-  // edges' midpoints. Where the input's edges are long against the distances, the largest distance
-  // can lie between vertices: the bunny at 10 % came to 0.219 % certified Hausdorff with points and
-  // face centroids as samples, 0.132 % with points and edge midpoints.
-  void sample_input(const Mesh& input) {
-    const Eigen::VectorX<Index> cls = position_classes(input);
-    std::vector<char> used(static_cast<std::size_t>(input.num_vertices()), 0);
-    std::vector<std::uint64_t> edges;
-    edges.reserve(3 * static_cast<std::size_t>(input.num_faces()));
-    for (Index f = 0; f < input.num_faces(); ++f)
-      for (int k = 0; k < 3; ++k) {
-        const Index a = cls[input.triangles(f, k)], b = cls[input.triangles(f, (k + 1) % 3)];
-        used[a] = 1;
-        if (a != b) edges.push_back(edge_key(a, b));
-      }
-    for (Index v = 0; v < input.num_vertices(); ++v)
-      if (used[v]) input_samples_.push_back(input.positions.row(v).transpose());
-    tbb::parallel_sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    for (const std::uint64_t e : edges)
-      input_samples_.push_back(0.5 * (input.positions.row(static_cast<Index>(e >> 32)) +
-                                      input.positions.row(static_cast<Index>(e & 0xffffffffu))).transpose());
   }
 
   Vec corner(Index f, int k) const { return points_[corners_[f][k]]; }
@@ -303,33 +278,70 @@ class Refitter {
 
   Mesh& output_;
   const RefitOptions& o_;
-  detail::AabbTree input_tree_;
+  const detail::AabbTree& input_tree_;
   std::vector<Vec> points_;                    // the output's positions, one per welded point
   std::vector<Index> point_of_;                // per output vertex
   std::vector<std::array<Index, 3>> corners_;  // per output face, its points
   std::vector<bool> fixed_;
   std::vector<Vec> reference_;                 // per output face: the orientation its turn is measured from
-  std::vector<Vec> input_samples_, grid_;
+  const std::vector<Vec>& input_samples_;
+  std::vector<Vec> grid_;
   std::vector<Pull> input_pulls_, output_pulls_;
   std::vector<Index> face_hint_;  // per output face: an input face near its centroid (facing_against's hint)
 };
 
 }  // namespace
 
-RefitReport refit_to_input(const Mesh& input, Mesh& simplified, const RefitOptions& options,
+namespace detail {
+
+// The input's points (once per position; vertices no face uses are not part of the surface) and its
+// edges' midpoints. Where the input's edges are long against the distances, the largest distance can
+// lie between vertices: the bunny at 10 % came to 0.219 % certified Hausdorff with points and face
+// centroids as samples, 0.132 % with points and edge midpoints.
+RefitInput::RefitInput(const Mesh& input, bool facing) : mesh(input), tree(input) {
+  if (facing) tree.prepare_facing();
+  const Eigen::VectorX<Index> cls = position_classes(input);
+  std::vector<char> used(static_cast<std::size_t>(input.num_vertices()), 0);
+  std::vector<std::uint64_t> edges;
+  edges.reserve(3 * static_cast<std::size_t>(input.num_faces()));
+  for (Index f = 0; f < input.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Index a = cls[input.triangles(f, k)], b = cls[input.triangles(f, (k + 1) % 3)];
+      used[a] = 1;
+      if (a != b) edges.push_back(edge_key(a, b));
+    }
+  for (Index v = 0; v < input.num_vertices(); ++v)
+    if (used[v]) samples.push_back(input.positions.row(v).transpose());
+  tbb::parallel_sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  for (const std::uint64_t e : edges)
+    samples.push_back(0.5 * (input.positions.row(static_cast<Index>(e >> 32)) +
+                             input.positions.row(static_cast<Index>(e & 0xffffffffu))).transpose());
+}
+
+RefitReport refit_to_input(const RefitInput& input, Mesh& simplified, const RefitOptions& options,
                            std::span<const Index> face_origin) {
   const auto start = std::chrono::steady_clock::now();
   if (options.passes < 0) throw Error(fmt::format("refit: passes must not be negative, got {}", options.passes));
   if (!(options.step > 0 && options.step <= 1)) throw Error(fmt::format("refit: step must be in (0, 1], got {}", options.step));
   if (!(options.exponent >= 0 && options.exponent <= 64))
     throw Error(fmt::format("refit: exponent must be between 0 and 64, got {}", options.exponent));
-  RefitReport report;
-  if (options.passes == 0 || input.num_faces() == 0 || simplified.num_faces() == 0) return report;
   if (!face_origin.empty() && face_origin.size() != static_cast<std::size_t>(simplified.num_faces()))
     throw Error(fmt::format("refit: {} face origins for {} faces", face_origin.size(), simplified.num_faces()));
+  RefitReport report;
+  if (options.passes == 0 || input.mesh.num_faces() == 0 || simplified.num_faces() == 0) return report;
   report = Refitter(input, simplified, face_origin, options).run();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
+}
+
+}  // namespace detail
+
+RefitReport refit_to_input(const Mesh& input, Mesh& simplified, const RefitOptions& options,
+                           std::span<const Index> face_origin) {
+  if (options.passes == 0 || input.num_faces() == 0 || simplified.num_faces() == 0)
+    return detail::refit_to_input(detail::RefitInput(Mesh{}, false), simplified, options, face_origin);
+  return detail::refit_to_input(detail::RefitInput(input, options.avoid_inverted), simplified, options, face_origin);
 }
 
 }  // namespace lodkit

@@ -59,30 +59,35 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   } else {
     r = detail::Engine(mesh, options).run(target);
   }
-  const int refit_passes = options.refit_passes.value_or(default_refit_passes(options.method, mesh.num_faces()));
-  if (refit_passes > 0 && !options.record_collapses && options.preserve_topology && r.collapses > 0) {
-    const InvertedFaces inverted = options.inverted_faces.value_or(default_inverted_faces(options.method));
-    // The faces keep within the limits the collapses kept: the same turn from their input faces. hoppe's
-    // energy fits the squared distances already, and a refit weighted less steeply keeps its RMS
-    // (bunny -> 1 %: RMS 0.127 % -> 0.111 % with exponent 2, 0.122 % with 6; docs/benchmarks-log.md).
+  if (const int passes = detail::refit_passes(mesh, options); passes > 0 && !options.record_collapses && r.collapses > 0) {
+    // The faces keep within the limits the collapses kept: the same turn from their input faces.
     const double total_turn =
         r.turn_limit_relaxed_at ? 90.0
                                 : std::max(options.max_total_normal_change_deg.value_or(default_max_total_normal_change(options.method)),
                                            options.max_normal_change_deg);
-    r.refit = refit_to_input(mesh, r.mesh,
-                             {.passes = refit_passes,
-                              .exponent = options.method == SimplifyMethod::Hoppe ? 2.0 : 6.0,
-                              .max_step_turn_deg = std::min(30.0, options.max_normal_change_deg),
-                              .max_total_turn_deg = total_turn,
-                              .min_triangle_quality = options.min_triangle_quality,
-                              .avoid_inverted = inverted != InvertedFaces::Allow,
-                              .fix_boundary = options.lock_boundary},
-                             r.face_origin);
+    r.refit = refit_to_input(mesh, r.mesh, detail::refit_options(options, passes, total_turn), r.face_origin);
   }
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
+
+namespace detail {
+
+RefitOptions refit_options(const SimplifyOptions& options, int passes, double total_turn_deg) {
+  const InvertedFaces inverted = options.inverted_faces.value_or(default_inverted_faces(options.method));
+  // hoppe's energy fits the squared distances already, and a refit weighted less steeply keeps its RMS
+  // (bunny -> 1 %: RMS 0.127 % -> 0.111 % with exponent 2, 0.122 % with 6; docs/benchmarks-log.md).
+  return {.passes = passes,
+          .exponent = options.method == SimplifyMethod::Hoppe ? 2.0 : 6.0,
+          .max_step_turn_deg = std::min(30.0, options.max_normal_change_deg),
+          .max_total_turn_deg = total_turn_deg,
+          .min_triangle_quality = options.min_triangle_quality,
+          .avoid_inverted = inverted != InvertedFaces::Allow,
+          .fix_boundary = options.lock_boundary};
+}
+
+}  // namespace detail
 
 int attribute_values_per_vertex(const Mesh& mesh) {
   return 3 * mesh.has_normals() + 2 * mesh.has_uvs() + 4 * mesh.has_colours();

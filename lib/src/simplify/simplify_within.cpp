@@ -1,14 +1,17 @@
 // simplify_within(): simplify() to the coarsest level found whose Hausdorff distance to the input is
 // proved within a limit: the collapses recorded as a progressive mesh, its levels searched by
-// prove_level_within().
+// prove_level_within(), then coarser levels refit and checked again.
 #include <lodkit/error.h>
+#include <lodkit/metrics.h>
 #include <lodkit/progressive.h>
 #include <lodkit/simplify.h>
 
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
+#include <optional>
 
+#include "simplify/refit_input.h"
 #include "simplify/target.h"
 
 namespace lodkit {
@@ -36,11 +39,68 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   const ProgressiveMesh pm = build_progressive_mesh(source, po);
 
   const ProvedLevel proved = prove_level_within(pm, source, max_distance);
-  const Index hi = proved.level;
-  const SimplifyResult::HausdorffLimit& within = proved.proof;
+  Index hi = proved.level;
+  SimplifyResult::HausdorffLimit within = proved.proof;
+  ExtractedLevel level = extract_level(pm, hi, VertexOrder::Input);
+
+  // The refit (as simplify() runs it) brings a level nearer the input, so a coarser level may pass once
+  // refit: the bunny at 0.2 % passes with 4,043 faces refit, against 6,167 without. Down from the proved
+  // level, halving the faces, refit levels are checked until one fails; then the search bisects between
+  // it and the last that passed, each level refit before its check, to 1/16 of the faces (about six refits: the bunny at 1 % takes 2.8 s instead of 0.53 s). Each face
+  // may turn from its orientation before the refit as far as the collapses let it turn from its input
+  // face. (Searching with 5 passes and refitting the level found with 10 ended coarser or finer by
+  // chance, 3,656 and 458 faces against 4,043 and 339 at 0.2 % and 1 %, in about as much time.)
+  std::optional<RefitReport> refit;
+  if (const int passes = detail::refit_passes(mesh, options); passes > 0 && pm.max_level() > 0) {
+    const double total_turn = std::max(
+        options.max_total_normal_change_deg.value_or(default_max_total_normal_change(options.method)), options.max_normal_change_deg);
+    const RefitOptions refit_options = detail::refit_options(options, passes, total_turn);
+    const detail::RefitInput input(source, refit_options.avoid_inverted);
+    const HausdorffChecker checker(source);
+    struct Refit {
+      ExtractedLevel level;
+      RefitReport report;
+      HausdorffCheck check;
+    };
+    auto refit_level = [&](Index l) {
+      Refit t{extract_level(pm, l, VertexOrder::Input), {}, {}};
+      t.report = detail::refit_to_input(input, t.level.mesh, refit_options);
+      t.check = checker.check(t.level.mesh, max_distance);
+      ++within.checks;
+      return t;
+    };
+    Refit best = refit_level(hi);
+    if (best.check.within) {
+      // Down by halves while the refit levels pass, then bisect.
+      Index lo = hi;
+      std::optional<Refit> failed;
+      while (!failed) {
+        lo = level_for_faces(pm, std::max<Index>(2, pm.num_faces(hi) / 2));
+        if (lo >= hi) break;
+        Refit t = refit_level(lo);
+        if (t.check.within) best = std::move(t), hi = lo;
+        else failed = std::move(t);
+      }
+      while (failed && hi - lo > 1 && pm.num_faces(hi) - pm.num_faces(lo) > std::max<Index>(2, pm.num_faces(hi) / 16)) {
+        const Index mid = lo + (hi - lo) / 2;
+        Refit t = refit_level(mid);
+        if (t.check.within) best = std::move(t), hi = mid;
+        else failed = std::move(t), lo = mid;
+      }
+      level = std::move(best.level);
+      refit = best.report;
+      within.bound = best.check.bound;
+      within.coarser_faces.reset();
+      if (failed) {
+        within.coarser_faces = failed->level.mesh.num_faces();
+        within.coarser_attained = failed->check.attained;
+        within.coarser_at = failed->check.attained_at;
+      }
+    }
+  }
 
   SimplifyResult r;
-  ExtractedLevel level = extract_level(pm, hi, VertexOrder::Input);
+  r.refit = refit;
   r.mesh = std::move(level.mesh);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   r.vertex_origin = std::move(level.vertex_origin);

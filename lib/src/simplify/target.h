@@ -1,6 +1,6 @@
 #pragma once
-// The face count a simplification is asked for, shared by simplify() and simplify_within() so that a
-// ratio means the same count in both.
+// What simplify() and simplify_within() must agree on: the face count asked for (so that a ratio means
+// the same count in both) and the refit after the collapses.
 #include <lodkit/simplify.h>
 
 #include <algorithm>
@@ -16,5 +16,15 @@ inline Index requested_faces(const Mesh& mesh, const SimplifyOptions& options) {
     target = std::max(target, static_cast<Index>(std::llround(*options.target_ratio * mesh.num_faces())));
   return target;
 }
+
+/// The refit passes `options` ask for (by method and size when unset), or 0 where no refit runs.
+inline int refit_passes(const Mesh& mesh, const SimplifyOptions& options) {
+  if (!options.preserve_topology) return 0;
+  return options.refit_passes.value_or(default_refit_passes(options.method, mesh.num_faces()));
+}
+
+/// The refit's options from the simplification's: its limits, and weights by method. `total_turn_deg`:
+/// how far a face may turn from its reference orientation (see refit_to_input()).
+RefitOptions refit_options(const SimplifyOptions& options, int passes, double total_turn_deg);
 
 }  // namespace lodkit::detail
