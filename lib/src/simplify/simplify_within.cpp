@@ -16,6 +16,64 @@
 
 namespace lodkit {
 
+namespace {
+
+struct RefitLevel {
+  ExtractedLevel level;
+  RefitReport report;
+  HausdorffCheck check;
+};
+
+struct RefitSearch {
+  Index level = 0;                   ///< of `best`
+  std::optional<RefitLevel> best;    ///< the coarsest refit level that passed; none if `proved` refit did not
+  std::optional<RefitLevel> failed;  ///< the refit level that failed nearest it, if one was checked
+  int checks = 0;
+};
+
+// The refit (as simplify() runs it) brings a level nearer the input, so a coarser level than the one
+// proved may pass once refit: the bunny at 0.2 % passes with 4,043 faces refit, against 6,167 without.
+// Down from `proved`, halving the faces, refit levels are checked until one fails; then the search
+// bisects between it and the last that passed, to 1/16 of the faces (about six refits: the bunny at
+// 1 % takes 2.8 s instead of 0.53 s). Each face may turn from its orientation before the refit as far
+// as the collapses let it turn from its input face. (Searching with 5 passes and refitting the level
+// found with 10 ended coarser or finer by chance, 3,656 and 458 faces against 4,043 and 339 at 0.2 %
+// and 1 %, in about as much time.)
+RefitSearch search_refit_levels(const ProgressiveMesh& pm, const Mesh& input, double max_distance, Index proved,
+                                const RefitOptions& options) {
+  RefitSearch search;
+  const detail::RefitInput prepared(input, options.avoid_inverted);
+  const HausdorffChecker checker(input);
+  auto refit_level = [&](Index l) {
+    RefitLevel t{extract_level(pm, l, VertexOrder::Input), {}, {}};
+    t.report = detail::refit_to_input(prepared, t.level.mesh, options);
+    t.check = checker.check(t.level.mesh, max_distance);
+    ++search.checks;
+    return t;
+  };
+  RefitLevel first = refit_level(proved);
+  if (!first.check.within) return search;
+  Index hi = proved, lo = proved;
+  search.best = std::move(first);
+  auto take = [&](Index l, RefitLevel&& t) {
+    if (t.check.within) search.best = std::move(t), hi = l;
+    else search.failed = std::move(t), lo = l;
+  };
+  while (!search.failed) {  // down by halves
+    const Index next = level_for_faces(pm, std::max<Index>(2, pm.num_faces(hi) / 2));
+    if (next >= hi) break;
+    take(next, refit_level(next));
+  }
+  while (search.failed && hi - lo > 1 && pm.num_faces(hi) - pm.num_faces(lo) > std::max<Index>(2, pm.num_faces(hi) / 16)) {
+    const Index mid = lo + (hi - lo) / 2;
+    take(mid, refit_level(mid));
+  }
+  search.level = hi;
+  return search;
+}
+
+}  // namespace
+
 SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const SimplifyOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   if (!std::isfinite(max_distance) || max_distance < 0)
@@ -43,58 +101,22 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   SimplifyResult::HausdorffLimit within = proved.proof;
   ExtractedLevel level = extract_level(pm, hi, VertexOrder::Input);
 
-  // The refit (as simplify() runs it) brings a level nearer the input, so a coarser level may pass once
-  // refit: the bunny at 0.2 % passes with 4,043 faces refit, against 6,167 without. Down from the proved
-  // level, halving the faces, refit levels are checked until one fails; then the search bisects between
-  // it and the last that passed, each level refit before its check, to 1/16 of the faces (about six refits: the bunny at 1 % takes 2.8 s instead of 0.53 s). Each face
-  // may turn from its orientation before the refit as far as the collapses let it turn from its input
-  // face. (Searching with 5 passes and refitting the level found with 10 ended coarser or finer by
-  // chance, 3,656 and 458 faces against 4,043 and 339 at 0.2 % and 1 %, in about as much time.)
   std::optional<RefitReport> refit;
   if (const int passes = detail::refit_passes(mesh, options); passes > 0 && pm.max_level() > 0) {
     const double total_turn = std::max(
         options.max_total_normal_change_deg.value_or(default_max_total_normal_change(options.method)), options.max_normal_change_deg);
-    const RefitOptions refit_options = detail::refit_options(options, passes, total_turn);
-    const detail::RefitInput input(source, refit_options.avoid_inverted);
-    const HausdorffChecker checker(source);
-    struct Refit {
-      ExtractedLevel level;
-      RefitReport report;
-      HausdorffCheck check;
-    };
-    auto refit_level = [&](Index l) {
-      Refit t{extract_level(pm, l, VertexOrder::Input), {}, {}};
-      t.report = detail::refit_to_input(input, t.level.mesh, refit_options);
-      t.check = checker.check(t.level.mesh, max_distance);
-      ++within.checks;
-      return t;
-    };
-    Refit best = refit_level(hi);
-    if (best.check.within) {
-      // Down by halves while the refit levels pass, then bisect.
-      Index lo = hi;
-      std::optional<Refit> failed;
-      while (!failed) {
-        lo = level_for_faces(pm, std::max<Index>(2, pm.num_faces(hi) / 2));
-        if (lo >= hi) break;
-        Refit t = refit_level(lo);
-        if (t.check.within) best = std::move(t), hi = lo;
-        else failed = std::move(t);
-      }
-      while (failed && hi - lo > 1 && pm.num_faces(hi) - pm.num_faces(lo) > std::max<Index>(2, pm.num_faces(hi) / 16)) {
-        const Index mid = lo + (hi - lo) / 2;
-        Refit t = refit_level(mid);
-        if (t.check.within) best = std::move(t), hi = mid;
-        else failed = std::move(t), lo = mid;
-      }
-      level = std::move(best.level);
-      refit = best.report;
-      within.bound = best.check.bound;
+    RefitSearch search = search_refit_levels(pm, source, max_distance, hi, detail::refit_options(options, passes, total_turn));
+    within.checks += search.checks;
+    if (search.best) {
+      hi = search.level;
+      level = std::move(search.best->level);
+      refit = search.best->report;
+      within.bound = search.best->check.bound;
       within.coarser_faces.reset();
-      if (failed) {
-        within.coarser_faces = failed->level.mesh.num_faces();
-        within.coarser_attained = failed->check.attained;
-        within.coarser_at = failed->check.attained_at;
+      if (search.failed) {
+        within.coarser_faces = search.failed->level.mesh.num_faces();
+        within.coarser_attained = search.failed->check.attained;
+        within.coarser_at = search.failed->check.attained_at;
       }
     }
   }
