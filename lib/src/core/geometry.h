@@ -95,6 +95,15 @@ inline double triangle_area(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   return 0.5 * (b - a).cross(c - a).norm();
 }
 
+/// A triangle's quality, 4 sqrt(3) area / sum of squared edges: 1 when equilateral, 0 when degenerate.
+/// `twice_area`: |(b - a) x (c - a)|, which callers checking a face's turn have at hand already.
+inline double triangle_quality(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                               double twice_area) {
+  constexpr double kTwoRootThree = 3.4641016151377544;  // 2 sqrt(3): half of 4 sqrt(3), for the doubled area
+  const double sum = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+  return sum > 0 ? kTwoRootThree * twice_area / sum : 0.0;
+}
+
 /// A point near `box` to measure positions from, such that p - origin is exact for every p in the box,
 /// and so (p - origin) + origin == p. Per axis, Sterbenz's lemma: x - o is exact when o/2 <= x <= 2o, so
 /// where the box lies within a factor of four of its distance from zero on one side, o is its centre

@@ -22,6 +22,7 @@
 #include "metrics/aabb_tree.h"
 #include "simplify/engine.h"
 #include "simplify/queue.h"
+#include "simplify/target.h"
 #include "simplify/slabs.h"
 
 namespace lodkit::detail {
@@ -266,10 +267,7 @@ class Engine {
   double total_turn_deg_ = 0;
   /// Faces left when the default limit on a face's turn from its input shape was relaxed (relax_total_turn()).
   std::optional<Index> relaxed_at_;
-  double starting_total_turn_deg() const {
-    return std::max(o_.max_total_normal_change_deg.value_or(default_max_total_normal_change(o_.method)),
-                    o_.max_normal_change_deg);
-  }
+  double starting_total_turn_deg() const { return detail::starting_total_turn_deg(o_); }
   void set_total_turn(double deg) {
     total_turn_deg_ = deg;
     cos_max_total_turn_ = std::cos(deg * std::numbers::pi / 180.0);

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <iterator>
 
+#include "core/geometry.h"
 #include "simplify/collapse_engine.h"
 
 namespace lodkit::detail {
@@ -105,7 +106,6 @@ Rejection Engine::structure(Index u, Index v, Freedom& freedom, Lane* link, Prob
 
 Rejection Engine::geometry(Lane& lane, Index u, Index v, const Eigen::Vector3d& p, bool inverted_ok) {
   if (!o_.preserve_topology) return Rejection::None;
-  constexpr double kQualityScale = 6.928203230275509;  // 4 sqrt(3): equilateral = 1
   const bool against_input = check_inverted_ && !inverted_ok;
   // The local checks on every changed face first, with each face's certificate against the input; the
   // nearest-input-face searches, where a certificate does not settle it, only once every local check
@@ -131,12 +131,9 @@ Rejection Engine::geometry(Lane& lane, Index u, Index v, const Eigen::Vector3d& 
       // must not add up to a flip over many collapses.
       if (l0 > 0 && n1.dot(n0) < cos_max_turn_ * l0 * l1) return Rejection::Flip;
       if (n1.dot(s_.face_normal0[f].cast<double>()) < cos_max_total_turn_ * l1) return Rejection::Flip;
-      auto quality = [&](const Eigen::Vector3d* t, double twice_area) {
-        const double sum = (t[1] - t[0]).squaredNorm() + (t[2] - t[1]).squaredNorm() + (t[0] - t[2]).squaredNorm();
-        return sum > 0 ? kQualityScale * 0.5 * twice_area / sum : 0.0;
-      };
-      const double q1 = quality(after, l1);
-      if (q1 < o_.min_triangle_quality && q1 < quality(before, l0)) return Rejection::Sliver;
+      const double q1 = triangle_quality(after[0], after[1], after[2], l1);
+      if (q1 < o_.min_triangle_quality && q1 < triangle_quality(before[0], before[1], before[2], l0))
+        return Rejection::Sliver;
       if (against_input) {
         const Eigen::Vector3d centroid = (after[0] + after[1] + after[2]) / 3.0 + s_.origin;
         if (!nearest_input_[f].certificate.settles(centroid, n1)) unsettled.push_back({f, centroid, n1});

@@ -191,9 +191,8 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
 // than stop, the run goes on with 90 degrees, the most that never lets a face face against its input self.
 // A limit the caller set is kept. Runs that reach their target without it are unchanged.
 bool Engine::relax_total_turn() {
-  constexpr double kFlipBoundary = 90.0;
-  if (o_.max_total_normal_change_deg || total_turn_deg_ >= kFlipBoundary || !o_.preserve_topology) return false;
-  set_total_turn(kFlipBoundary);
+  if (o_.max_total_normal_change_deg || total_turn_deg_ >= kRelaxedTotalTurnDeg || !o_.preserve_topology) return false;
+  set_total_turn(kRelaxedTotalTurnDeg);
   relaxed_at_ = s_.alive_faces;
   return true;
 }

@@ -14,8 +14,9 @@
 // takes its samples' distances to zero, weights (d / d_max)^exponent, clamps it to the distance of its
 // farthest sample, and all vertices step a fraction of it at once. A pass that finds the largest
 // distance lower keeps the step and grows the fraction; one that does not goes back to the best
-// positions and halves it. Faces may not turn more than a limit per step or from the output's own
-// orientation, lose quality below the simplifier's floor, or (when asked) come to face against the input.
+// positions and halves it. Faces may not turn more than a limit per step or from their reference
+// orientation (their input face's, else their own before the refit), lose quality below the
+// simplifier's floor, or (when asked) come to face against the input.
 #include <lodkit/error.h>
 #include <lodkit/simplify.h>
 
@@ -33,6 +34,7 @@
 #include <span>
 #include <unordered_map>
 
+#include "core/geometry.h"
 #include "simplify/refit_input.h"
 
 namespace lodkit {
@@ -49,11 +51,6 @@ Vec barycentric(const Vec& a, const Vec& b, const Vec& c, const Vec& p) {
   const double v = (d11 * dp0 - d01 * dp1) / det, w = (d00 * dp1 - d01 * dp0) / det;
   const Vec bary = Vec(1 - v - w, v, w).cwiseMax(0.0);
   return bary / bary.sum();
-}
-
-double triangle_quality(const Vec& a, const Vec& b, const Vec& c) {
-  const double edges = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
-  return edges > 0 ? 2 * std::sqrt(3.0) * (b - a).cross(c - a).norm() / edges : 0.0;
 }
 
 std::uint64_t edge_key(Index a, Index b) {
@@ -254,10 +251,11 @@ class Refitter {
         if (points_[c[0]] == kept[c[0]] && points_[c[1]] == kept[c[1]] && points_[c[2]] == kept[c[2]]) return;
         const Vec now = normal(static_cast<Index>(f));
         const Vec before = (kept[c[1]] - kept[c[0]]).cross(kept[c[2]] - kept[c[0]]);
-        const double quality = triangle_quality(points_[c[0]], points_[c[1]], points_[c[2]]);
+        const double quality = detail::triangle_quality(points_[c[0]], points_[c[1]], points_[c[2]], now.norm());
         bad[f] = now.dot(before) < cos_step * now.norm() * before.norm() ||
                  now.dot(reference_[f]) < cos_total * now.norm() * reference_[f].norm() ||
-                 (quality < o_.min_triangle_quality && quality < triangle_quality(kept[c[0]], kept[c[1]], kept[c[2]]));
+                 (quality < o_.min_triangle_quality &&
+                  quality < detail::triangle_quality(kept[c[0]], kept[c[1]], kept[c[2]], before.norm()));
         if (bad[f] || !o_.avoid_inverted) return;
         Index& hint = face_hint_[f];
         if (input_tree_.facing_against((points_[c[0]] + points_[c[1]] + points_[c[2]]) / 3, now, hint)) {
@@ -294,6 +292,17 @@ class Refitter {
 
 namespace detail {
 
+bool needs_refit(const Mesh& input, const Mesh& simplified, const RefitOptions& options,
+                 std::span<const Index> face_origin) {
+  if (options.passes < 0) throw Error(fmt::format("refit: passes must not be negative, got {}", options.passes));
+  if (!(options.step > 0 && options.step <= 1)) throw Error(fmt::format("refit: step must be in (0, 1], got {}", options.step));
+  if (!(options.exponent >= 0 && options.exponent <= 64))
+    throw Error(fmt::format("refit: exponent must be between 0 and 64, got {}", options.exponent));
+  if (!face_origin.empty() && face_origin.size() != static_cast<std::size_t>(simplified.num_faces()))
+    throw Error(fmt::format("refit: {} face origins for {} faces", face_origin.size(), simplified.num_faces()));
+  return options.passes > 0 && input.num_faces() > 0 && simplified.num_faces() > 0;
+}
+
 // The input's points (once per position; vertices no face uses are not part of the surface) and its
 // edges' midpoints. Where the input's edges are long against the distances, the largest distance can
 // lie between vertices: the bunny at 10 % came to 0.219 % certified Hausdorff with points and face
@@ -322,14 +331,8 @@ RefitInput::RefitInput(const Mesh& input, bool facing) : mesh(input), tree(input
 RefitReport refit_to_input(const RefitInput& input, Mesh& simplified, const RefitOptions& options,
                            std::span<const Index> face_origin) {
   const auto start = std::chrono::steady_clock::now();
-  if (options.passes < 0) throw Error(fmt::format("refit: passes must not be negative, got {}", options.passes));
-  if (!(options.step > 0 && options.step <= 1)) throw Error(fmt::format("refit: step must be in (0, 1], got {}", options.step));
-  if (!(options.exponent >= 0 && options.exponent <= 64))
-    throw Error(fmt::format("refit: exponent must be between 0 and 64, got {}", options.exponent));
-  if (!face_origin.empty() && face_origin.size() != static_cast<std::size_t>(simplified.num_faces()))
-    throw Error(fmt::format("refit: {} face origins for {} faces", face_origin.size(), simplified.num_faces()));
   RefitReport report;
-  if (options.passes == 0 || input.mesh.num_faces() == 0 || simplified.num_faces() == 0) return report;
+  if (!needs_refit(input.mesh, simplified, options, face_origin)) return report;
   report = Refitter(input, simplified, face_origin, options).run();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
@@ -339,8 +342,7 @@ RefitReport refit_to_input(const RefitInput& input, Mesh& simplified, const Refi
 
 RefitReport refit_to_input(const Mesh& input, Mesh& simplified, const RefitOptions& options,
                            std::span<const Index> face_origin) {
-  if (options.passes == 0 || input.num_faces() == 0 || simplified.num_faces() == 0)
-    return detail::refit_to_input(detail::RefitInput(Mesh{}, false), simplified, options, face_origin);
+  if (!detail::needs_refit(input, simplified, options, face_origin)) return {};
   return detail::refit_to_input(detail::RefitInput(input, options.avoid_inverted), simplified, options, face_origin);
 }
 

@@ -19,6 +19,11 @@ struct RefitInput {
   std::vector<Eigen::Vector3d> samples;  ///< the input's points and edge midpoints
 };
 
+/// Whether a refit has anything to do (passes, and faces on both sides).
+/// \throw Error for invalid options, or face origins that do not match the faces.
+bool needs_refit(const Mesh& input, const Mesh& simplified, const RefitOptions& options,
+                 std::span<const Index> face_origin);
+
 /// refit_to_input() against a prepared input.
 RefitReport refit_to_input(const RefitInput& input, Mesh& simplified, const RefitOptions& options,
                            std::span<const Index> face_origin = {});

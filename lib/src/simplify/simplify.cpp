@@ -61,10 +61,7 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   }
   if (const int passes = detail::refit_passes(mesh, options); passes > 0 && !options.record_collapses && r.collapses > 0) {
     // The faces keep within the limits the collapses kept: the same turn from their input faces.
-    const double total_turn =
-        r.turn_limit_relaxed_at ? 90.0
-                                : std::max(options.max_total_normal_change_deg.value_or(default_max_total_normal_change(options.method)),
-                                           options.max_normal_change_deg);
+    const double total_turn = r.turn_limit_relaxed_at ? detail::kRelaxedTotalTurnDeg : detail::starting_total_turn_deg(options);
     r.refit = refit_to_input(mesh, r.mesh, detail::refit_options(options, passes, total_turn), r.face_origin);
   }
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);

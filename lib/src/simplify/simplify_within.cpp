@@ -103,9 +103,8 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
 
   std::optional<RefitReport> refit;
   if (const int passes = detail::refit_passes(mesh, options); passes > 0 && pm.max_level() > 0) {
-    const double total_turn = std::max(
-        options.max_total_normal_change_deg.value_or(default_max_total_normal_change(options.method)), options.max_normal_change_deg);
-    RefitSearch search = search_refit_levels(pm, source, max_distance, hi, detail::refit_options(options, passes, total_turn));
+    const RefitOptions refit_options = detail::refit_options(options, passes, detail::starting_total_turn_deg(options));
+    RefitSearch search = search_refit_levels(pm, source, max_distance, hi, refit_options);
     within.checks += search.checks;
     if (search.best) {
       hi = search.level;

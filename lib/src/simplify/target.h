@@ -23,6 +23,17 @@ inline int refit_passes(const Mesh& mesh, const SimplifyOptions& options) {
   return options.refit_passes.value_or(default_refit_passes(options.method, mesh.num_faces()));
 }
 
+/// The total turn a default limit relaxes to where it alone would stop a run short (Engine::relax_total_turn()):
+/// the most that never lets a face face against its input self.
+constexpr double kRelaxedTotalTurnDeg = 90.0;
+
+/// How far a face may turn from its input orientation over all collapses, before any relaxation (the
+/// engine's starting limit; SimplifyOptions::max_total_normal_change_deg).
+inline double starting_total_turn_deg(const SimplifyOptions& options) {
+  return std::max(options.max_total_normal_change_deg.value_or(default_max_total_normal_change(options.method)),
+                  options.max_normal_change_deg);
+}
+
 /// The refit's options from the simplification's: its limits, and weights by method. `total_turn_deg`:
 /// how far a face may turn from its reference orientation (see refit_to_input()).
 RefitOptions refit_options(const SimplifyOptions& options, int passes, double total_turn_deg);
