@@ -59,17 +59,20 @@ std::vector<Probe> probes_near(const Mesh& m, int count, double offset, unsigned
   return probes;
 }
 
+// With and without the tree's copy of the corners (whose faces are first ruled out by their own boxes).
 TEST(AabbTree, ClosestMatchesBruteForceWhateverTheHint) {
   const Mesh torus = make_torus({});
-  const AabbTree tree(torus);
-  std::mt19937 rng(3);
-  std::uniform_int_distribution<Index> face(0, torus.num_faces() - 1);
-  for (const Probe& probe : probes_near(torus, 400, 0.5, 11)) {
-    const auto [face_expected, d_expected] = brute_closest(torus, probe.point);
-    for (const Index hint : {Index{-1}, probe.source, face(rng)}) {
-      const AabbTree::Hit hit = tree.closest(probe.point, hint);
-      EXPECT_EQ(hit.face, face_expected);
-      EXPECT_EQ(hit.squared_distance, d_expected);
+  for (const bool copy_corners : {true, false}) {
+    const AabbTree tree(torus, copy_corners);
+    std::mt19937 rng(3);
+    std::uniform_int_distribution<Index> face(0, torus.num_faces() - 1);
+    for (const Probe& probe : probes_near(torus, 400, 0.5, 11)) {
+      const auto [face_expected, d_expected] = brute_closest(torus, probe.point);
+      for (const Index hint : {Index{-1}, probe.source, face(rng)}) {
+        const AabbTree::Hit hit = tree.closest(probe.point, hint);
+        EXPECT_EQ(hit.face, face_expected);
+        EXPECT_EQ(hit.squared_distance, d_expected);
+      }
     }
   }
 }

@@ -63,7 +63,7 @@ std::pair<int, int> subtree_nodes_pair(int n) {
 int subtree_nodes(int n) { return subtree_nodes_pair(n).first; }
 }  // namespace
 
-AabbTree::AabbTree(const Mesh& mesh) : mesh_(mesh) {
+AabbTree::AabbTree(const Mesh& mesh, bool copy_corners) : mesh_(mesh) {
   const Index n = mesh.num_faces();
   order_.resize(static_cast<std::size_t>(n));
   // The faces are split by their centroids, kept beside their numbers so that the splits read memory
@@ -76,7 +76,12 @@ AabbTree::AabbTree(const Mesh& mesh) : mesh_(mesh) {
   });
   nodes_.resize(n > 0 ? static_cast<std::size_t>(subtree_nodes(static_cast<int>(n))) : 1);
   if (n > 0) build(0, 1, 0, static_cast<int>(n), centred);
-  tbb::parallel_for(Index{0}, n, [&](Index i) { order_[i] = centred[i].face; });
+  if (copy_corners) corners_.resize(static_cast<std::size_t>(n));
+  tbb::parallel_for(Index{0}, n, [&](Index i) {
+    order_[i] = centred[i].face;
+    if (copy_corners)
+      for (int k = 0; k < 3; ++k) corners_[i][k] = mesh.positions.row(mesh.triangles(order_[i], k)).transpose();
+  });
 }
 
 void AabbTree::build(int node, int free, int begin, int end, std::vector<Centred>& centred) {
@@ -112,14 +117,14 @@ void AabbTree::build(int node, int free, int begin, int end, std::vector<Centred
 
 AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
   Hit best{p, std::numeric_limits<double>::infinity(), -1};
-  auto test_face = [&](Index f) {
-    const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
-                                                        mesh_.positions.row(mesh_.triangles(f, 1)),
-                                                        mesh_.positions.row(mesh_.triangles(f, 2)));
+  auto test_corners = [&](Index f, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+    const Eigen::Vector3d q = closest_point_on_triangle(p, a, b, c);
     const double d = (q - p).squaredNorm();
     if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best = {q, d, f};
   };
-  if (hint >= 0) test_face(hint);
+  if (hint >= 0)
+    test_corners(hint, mesh_.positions.row(mesh_.triangles(hint, 0)), mesh_.positions.row(mesh_.triangles(hint, 1)),
+                 mesh_.positions.row(mesh_.triangles(hint, 2)));
   if (nodes_.empty() || order_.empty()) return best;
   NodeStack stack;
   stack.push(0, box_squared_distance(nodes_[0].box, p));
@@ -128,7 +133,18 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
     if (stack.distance[stack.top] > best.squared_distance) continue;
     const Node& node = nodes_[stack.node[stack.top]];
     if (node.count > 0) {
-      for (int i = node.first; i < node.first + node.count; ++i) test_face(order_[i]);
+      for (int i = node.first; i < node.first + node.count; ++i) {
+        const Index f = order_[i];
+        if (corners_.empty()) {
+          test_corners(f, mesh_.positions.row(mesh_.triangles(f, 0)), mesh_.positions.row(mesh_.triangles(f, 1)),
+                       mesh_.positions.row(mesh_.triangles(f, 2)));
+          continue;
+        }
+        // The face's own box first: most faces of a leaf lie farther than the best found so far.
+        const auto& t = corners_[i];
+        const Eigen::Vector3d lo = t[0].cwiseMin(t[1]).cwiseMin(t[2]), hi = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
+        if ((p - p.cwiseMax(lo).cwiseMin(hi)).squaredNorm() <= best.squared_distance) test_corners(f, t[0], t[1], t[2]);
+      }
       continue;
     }
     stack.push_children(nodes_, node, p);

@@ -3,6 +3,7 @@
 #include <lodkit/mesh.h>
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -10,7 +11,9 @@ namespace lodkit::detail {
 
 class AabbTree {
  public:
-  explicit AabbTree(const Mesh& mesh);
+  /// `copy_corners`: keep a copy of every face's corners in the tree's order (72 bytes a face), which
+  /// makes closest() about 15 % faster; facing_against() does not use it.
+  explicit AabbTree(const Mesh& mesh, bool copy_corners = true);
 
   struct Hit {
     Eigen::Vector3d point;
@@ -90,6 +93,7 @@ class AabbTree {
   const Mesh& mesh_;
   std::vector<Node> nodes_;
   std::vector<Index> order_;
+  std::vector<std::array<Eigen::Vector3d, 3>> corners_;  // per slot of order_ (or none): its face's corners
   // prepare_facing():
   std::vector<Eigen::Vector3d> normals_;  // per face, unit (zero: no area)
   std::vector<Cone> cones_;              // per node, while the certificates are found
