@@ -252,19 +252,36 @@ TEST(CliSimplify, TheRefitIsReportedAndCanBeTurnedOff) {
   ASSERT_EQ(r.status, 0) << r.err;
   const auto with = nlohmann::json::parse(r.out);
   ASSERT_TRUE(with.contains("refit")) << r.out;
-  EXPECT_EQ(with["refit"]["passes"].get<int>(), 10);
+  // Both stages: 10 passes towards the largest distances, then up to 8 towards the RMS.
+  EXPECT_GT(with["refit"]["passes"].get<int>(), 10);
+  EXPECT_LE(with["refit"]["passes"].get<int>(), 18);
+  EXPECT_GT(with["refit"]["rms_steps"].get<int>(), 0);
   EXPECT_LT(with["refit"]["sampled_max_after"].get<double>(), with["refit"]["sampled_max_before"].get<double>());
+  EXPECT_LT(with["refit"]["sampled_rms_after"].get<double>(), with["refit"]["sampled_rms_before"].get<double>());
   r = run(dir, "simplify b.ply -o s0.ply --ratio 0.05 --measure --json --refit-passes 0");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto without = nlohmann::json::parse(r.out);
   EXPECT_FALSE(without.contains("refit"));
   EXPECT_LT(with["measured"]["hausdorff"].get<double>(), without["measured"]["hausdorff"].get<double>());
+  // The second stage lowers the RMS and keeps the largest distances.
+  r = run(dir, "simplify b.ply -o s1.ply --ratio 0.05 --measure --json --refit-rms-passes 0");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto first_only = nlohmann::json::parse(r.out);
+  EXPECT_EQ(first_only["refit"]["passes"].get<int>(), 10);
+  EXPECT_LT(with["measured"]["rms"].get<double>(), first_only["measured"]["rms"].get<double>());
+  EXPECT_LT(with["measured"]["hausdorff"].get<double>(), 1.02 * first_only["measured"]["hausdorff"].get<double>());
   r = run(dir, "simplify b.ply -o s.ply --ratio 0.05");
   EXPECT_NE(r.err.find("refit: largest sampled distance"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(", RMS "), std::string::npos) << r.err;
   // hoppe takes it when asked; schroeder has no such step and refuses the option.
-  r = run(dir, "simplify b.ply -o s.ply --ratio 0.05 --method hoppe --refit-passes 3 --json");
+  r = run(dir, "simplify b.ply -o s.ply --ratio 0.05 --method hoppe --refit-passes 3 --refit-rms-passes 0 --json");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["refit"]["passes"].get<int>(), 3);
+  r = run(dir, "simplify b.ply -o s.ply --ratio 0.05 --method hoppe --refit-rms-passes 2 --json");  // the second stage alone
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["refit"]["steps"].get<int>(), 0);
+  EXPECT_LE(nlohmann::json::parse(r.out)["refit"]["passes"].get<int>(), 2);
+  EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --refit-rms-passes -1").status, 2);
   EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --refit-passes -1").status, 2);
   EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --refit-passes 3 --method schroeder").status, 2);
 }

@@ -236,7 +236,8 @@ TEST(Compare, CertifiesAsCheaplyAgainstAnInsideOutSurface) {
   inside_out.triangles.col(1).swap(inside_out.triangles.col(2));
   const Comparison straight = compare(coarse, fine), reversed = compare(coarse, inside_out);
   EXPECT_EQ(straight.hausdorff, reversed.hausdorff);
-  EXPECT_EQ(straight.hausdorff_bound, reversed.hausdorff_bound);
+  // (Equal but for rounding: reversing a triangle's corners changes the order of a closest point's sums.)
+  EXPECT_NEAR(straight.hausdorff_bound, reversed.hausdorff_bound, 1e-12 * straight.hausdorff_bound);
   EXPECT_EQ(straight.a_to_b.max_queries, reversed.a_to_b.max_queries);
   EXPECT_EQ(straight.b_to_a.max_queries, reversed.b_to_a.max_queries);
 }

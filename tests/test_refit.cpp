@@ -47,13 +47,33 @@ TEST(Refit, LowersTheCertifiedHausdorffDistanceAndKeepsEverythingButPositions) {
   }
 }
 
+TEST(Refit, TheRmsStageLowersTheRmsAndKeepsTheLargestDistances) {
+  for (const Mesh& fine : {test::bumpy_sphere(5, 0.03), make_torus({.major_segments = 128, .minor_segments = 48})}) {
+    const SimplifyResult coarse = unrefit(fine, 0.02);
+    Mesh first = coarse.mesh, both = coarse.mesh;
+    const RefitReport a = refit_to_input(fine, first, {.rms_passes = 0}, coarse.face_origin);
+    const RefitReport b = refit_to_input(fine, both, {}, coarse.face_origin);
+    EXPECT_EQ(a.rms_steps, 0);
+    EXPECT_GT(b.rms_steps, 0);
+    // The guard: no sample got farther than the first stage's largest.
+    EXPECT_EQ(b.sampled_max_after, a.sampled_max_after);
+    EXPECT_LT(b.sampled_rms_after, 0.97 * a.sampled_rms_after);
+    const Comparison ca = compare(fine, first), cb = compare(fine, both);
+    EXPECT_LT(cb.rms, 0.97 * ca.rms);
+    EXPECT_LT(cb.hausdorff_bound, 1.02 * ca.hausdorff);
+    EXPECT_EQ(count_flipped_faces(fine, both), 0);
+    EXPECT_TRUE(inspect(both).manifold);
+  }
+}
+
 TEST(Refit, SimplifyRunsItByDefaultForQuadricAndReportsIt) {
   const Mesh fine = test::bumpy_sphere(5, 0.03);
   SimplifyOptions o;
   o.target_ratio = 0.02;
   const SimplifyResult r = simplify(fine, o);
   ASSERT_TRUE(r.refit);
-  EXPECT_EQ(r.refit->passes, default_refit_passes(SimplifyMethod::Quadric, fine.num_faces()));
+  EXPECT_GT(r.refit->passes, default_refit_passes(SimplifyMethod::Quadric, fine.num_faces()));  // and the RMS stage's
+  EXPECT_GT(r.refit->rms_steps, 0);
   EXPECT_LT(r.refit->sampled_max_after, r.refit->sampled_max_before);
   const SimplifyResult without = unrefit(fine, 0.02);
   EXPECT_FALSE(without.refit);
@@ -166,9 +186,14 @@ TEST(Refit, BadOptionsAreErrors) {
   SimplifyOptions o;
   o.refit_passes = -2;
   EXPECT_THROW(simplify(fine, o), Error);
+  EXPECT_THROW(refit_to_input(fine, coarse, {.rms_passes = -1}), Error);
+  EXPECT_THROW(refit_to_input(fine, coarse, {.rms_guard = 1.5}), Error);
+  o.refit_passes.reset();
+  o.refit_rms_passes = -1;
+  EXPECT_THROW(simplify(fine, o), Error);
   // Zero passes change nothing.
   const Mesh copy = coarse;
-  refit_to_input(fine, coarse, {.passes = 0});
+  refit_to_input(fine, coarse, {.passes = 0, .rms_passes = 0});
   EXPECT_EQ(coarse.positions, copy.positions);
 }
 

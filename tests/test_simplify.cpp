@@ -536,19 +536,23 @@ TEST(Simplify, FarFromTheOriginSimplifiesAsWellAsAtIt) {
 
 TEST(Simplify, AShiftedCylinderSimplifiesTheSameWay) {
   // Collapses along a cylinder's straight sides cost nothing; rounding used to pick among them, so
-  // moving the input changed the result (here Hausdorff 0.61-0.77 % over five shifts). Ties go to the
-  // shorter edge now, and every shift gives the same error.
+  // shorter edge now, and every shift gives the same error. The refit's RMS stage moves the largest
+  // distance off its samples, where positions that differ by rounding show: 0.01294-0.01310 over the
+  // shifts, so with it the bound is 2 %; the collapses and the refit's first stage stay within 1 %.
   const Mesh cylinder = make_cylinder({.segments = 64, .stacks = 16});
-  SimplifyOptions o;
-  o.target_ratio = 0.03;
-  std::vector<double> errors;
-  for (const double shift : {0.0, 0.37, 1.9, 5.3, 11.1}) {
-    Mesh moved = cylinder;
-    moved.positions.rowwise() += Eigen::RowVector3d(shift, 2 * shift, 3 * shift);
-    errors.push_back(compare(moved, simplify(moved, o).mesh).hausdorff);
+  for (const int rms_passes : {0, kDefaultRefitRmsPasses}) {
+    SimplifyOptions o;
+    o.target_ratio = 0.03;
+    o.refit_rms_passes = rms_passes;
+    std::vector<double> errors;
+    for (const double shift : {0.0, 0.37, 1.9, 5.3, 11.1}) {
+      Mesh moved = cylinder;
+      moved.positions.rowwise() += Eigen::RowVector3d(shift, 2 * shift, 3 * shift);
+      errors.push_back(compare(moved, simplify(moved, o).mesh).hausdorff);
+    }
+    const auto [least, most] = std::minmax_element(errors.begin(), errors.end());
+    EXPECT_LT(*most, (rms_passes == 0 ? 1.01 : 1.02) * *least) << *least << " .. " << *most;
   }
-  const auto [least, most] = std::minmax_element(errors.begin(), errors.end());
-  EXPECT_LT(*most, 1.01 * *least) << *least << " .. " << *most;
 }
 
 TEST(Simplify, TriangleSoupKeepsEveryTriangleAndSaysWhy) {
@@ -819,6 +823,7 @@ TEST(Simplify, AvoidingInvertedFacesWaitsForDearerCollapsesNotForAll) {
   }
   SimplifyOptions o;
   o.target_faces = 300;
+  o.refit_passes = 0;  // the collapses' waiting is the subject here (the refit's own check: test_refit.cpp)
   auto run = [&](InvertedFaces mode) {
     o.inverted_faces = mode;
     return simplify(jaw, o);

@@ -40,6 +40,7 @@ struct SimplifyCliOptions {
   Index lane_faces = -1;  // unset: by method
   Index max_valence = -1;  // unset: by method
   int refit_passes = -1;   // unset: by method
+  int refit_rms_passes = -1;  // unset: after the first stage
   double max_total_normal_change = -1;  // unset: by method
 };
 
@@ -222,6 +223,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   if (o.lane_faces >= 0) s.lane_faces = o.lane_faces;
   if (o.max_valence >= 0) s.max_valence = o.max_valence;
   if (o.refit_passes >= 0) s.refit_passes = o.refit_passes;
+  if (o.refit_rms_passes >= 0) s.refit_rms_passes = o.refit_rms_passes;
   const bool show_progress = !global.quiet && !o.json && isatty(STDERR_FILENO) && mesh.num_faces() > 200'000;
   if (show_progress)
     s.progress = [](double f) {
@@ -267,11 +269,16 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
     if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
     if (r.refit)
-      j["refit"] = {{"passes", r.refit->passes}, {"steps", r.refit->steps}, {"moved_vertices", r.refit->moved_vertices},
+      j["refit"] = {{"passes", r.refit->passes}, {"steps", r.refit->steps}, {"rms_steps", r.refit->rms_steps},
+                    {"moved_vertices", r.refit->moved_vertices},
                     {"sampled_max_before", r.refit->sampled_max_before},
                     {"sampled_max_before_percent", r.refit->sampled_max_before * pct},
                     {"sampled_max_after", r.refit->sampled_max_after},
-                    {"sampled_max_after_percent", r.refit->sampled_max_after * pct}, {"seconds", r.refit->seconds}};
+                    {"sampled_max_after_percent", r.refit->sampled_max_after * pct},
+                    {"sampled_rms_before", r.refit->sampled_rms_before},
+                    {"sampled_rms_before_percent", r.refit->sampled_rms_before * pct},
+                    {"sampled_rms_after", r.refit->sampled_rms_after},
+                    {"sampled_rms_after_percent", r.refit->sampled_rms_after * pct}, {"seconds", r.refit->seconds}};
     if (hint) j["hint"] = *hint;
     if (o.measure) put_measured(j, measured);
     if (measured) {
@@ -292,8 +299,9 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
     if (r.lanes > 1) fmt::print(stderr, "  {} slabs simplified side by side, then one queue for the rest\n", r.lanes);
     if (r.refit)
-      fmt::print(stderr, "  refit: largest sampled distance {:.4f}% -> {:.4f}% in {} steps ({:.3f} s)\n",
-                 r.refit->sampled_max_before * pct, r.refit->sampled_max_after * pct, r.refit->steps, r.refit->seconds);
+      fmt::print(stderr, "  refit: largest sampled distance {:.4f}% -> {:.4f}%, RMS {:.5f}% -> {:.5f}%, in {} + {} steps ({:.3f} s)\n",
+                 r.refit->sampled_max_before * pct, r.refit->sampled_max_after * pct, r.refit->sampled_rms_before * pct,
+                 r.refit->sampled_rms_after * pct, r.refit->steps, r.refit->rms_steps, r.refit->seconds);
     if (r.dropped_degenerate_faces > 0)
       fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
                  thousands(r.dropped_degenerate_faces));
@@ -384,7 +392,12 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(kNonNegative);
   sub->add_option("--refit-passes", opt->refit_passes,
                   "After the collapses, fit every vertex to the input at once, towards the largest distances, in this "
-                  "many sampling passes (0 = off; default 10 for quadric on inputs up to 500,000 faces, else 0)")
+                  "many sampling passes (0 = no refit; default 10 for quadric on inputs up to 500,000 faces, else 0)")
+      ->check(CLI::Range(0, 1000));
+  sub->add_option("--refit-rms-passes", opt->refit_rms_passes,
+                  "Then fit the squared distances (the RMS) in this many passes, no sample getting farther than "
+                  "the larger of its own distance and 0.9 times the largest (default 8 after --refit-passes N > 0, "
+                  "else 0; given alone, this stage runs alone)")
       ->check(CLI::Range(0, 1000));
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
@@ -405,7 +418,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
     refuse_unless(m != "schroeder",
                   {"--placement", "--preserve-boundary", "--lock-boundary", "--allow-topology-change",
                    "--max-normal-change", "--max-total-normal-change", "--crease-weight", "--attribute-weights",
-                   "--lane-faces", "--max-valence", "--refit-passes", "--inverted-faces", "--no-inverted-faces", "--max-hausdorff",
+                   "--lane-faces", "--max-valence", "--refit-passes", "--refit-rms-passes", "--inverted-faces", "--no-inverted-faces", "--max-hausdorff",
                    "--pixel-error"},
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
@@ -430,7 +443,9 @@ Examples:
   lodkit simplify suzanne_flat.ply -o suzanne_lo.ply --ratio 0.1 --recompute-normals
   lodkit simplify horse.ply -o horse_lo.ply --ratio 0.1 --inverted-faces refuse --measure
   lodkit simplify scan_1M.ply -o scan_lo.ply --ratio 0.1 --inverted-faces allow   # faster; faces may face against the input
-  lodkit simplify scan.ply -o scan_fast.ply --ratio 0.1 --refit-passes 0   # 3-5x faster; errors as the collapses left them
+  lodkit simplify scan.ply -o scan_fast.ply --ratio 0.1 --refit-passes 0   # 5-8x faster; errors as the collapses left them
+  lodkit simplify scan.ply -o scan_h.ply --ratio 0.1 --refit-rms-passes 0  # the refit for the largest distances only
+  lodkit simplify bunny.ply -o bunny_h.ply --ratio 0.1 --method hoppe --refit-rms-passes 8   # hoppe, RMS fitted after
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};
 }

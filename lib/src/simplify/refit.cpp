@@ -17,6 +17,12 @@
 // positions and halves it. Faces may not turn more than a limit per step or from their reference
 // orientation (their input face's, else their own before the refit), lose quality below the
 // simplifier's floor, or (when asked) come to face against the input.
+//
+// Then a second stage fits the squared distances (the RMS), with unit weights, under a guard: no sample
+// may get farther than the larger of its own distance at the best positions so far and rms_guard times
+// the largest, so the largest distances stay where the first stage left them. A step whose samples
+// break the guard sends the corners of their faces back and measures again, up to four times; one
+// that still breaks it, or does not lower the sum of squares, goes back and halves the fraction.
 #include <lodkit/error.h>
 #include <lodkit/simplify.h>
 
@@ -97,29 +103,10 @@ class Refitter {
 
   RefitReport run() {
     RefitReport report;
-    const std::size_t n = points_.size();
     const std::vector<Vec> start = points_;
-    std::vector<Vec> best = points_, step(n, Vec::Zero());
-    double best_max = std::numeric_limits<double>::infinity(), scale = o_.step;
-    for (int pass = 0; pass < o_.passes; ++pass) {
-      const double sampled_max = sample();
-      ++report.passes;
-      if (pass == 0) report.sampled_max_before = sampled_max;
-      if (sampled_max < best_max) {
-        best_max = sampled_max, best = points_, report.steps += pass > 0;
-        if (sampled_max == 0 || pass + 1 == o_.passes) break;
-        solve(sampled_max, step);
-        if (pass > 0) scale = std::min(1.0, scale * kGrow);
-      } else {
-        // Farther: back to the best positions, with half the step.
-        scale *= 0.5;
-        if (scale < o_.step / 16) break;
-      }
-      propose(best, step, scale);
-    }
-    points_ = best;
-    report.sampled_max_after = best_max;
-    for (std::size_t p = 0; p < n; ++p) report.moved_vertices += points_[p] != start[p];
+    fit_largest(report);
+    fit_squares(report);
+    for (std::size_t p = 0; p < points_.size(); ++p) report.moved_vertices += points_[p] != start[p];
     refresh_output();
     return report;
   }
@@ -154,7 +141,21 @@ class Refitter {
   Vec normal(Index f) const { return (corner(f, 1) - corner(f, 0)).cross(corner(f, 2) - corner(f, 0)); }
 
   // Every sample's distance and pull at the current positions; returns the largest distance.
-  double sample() {
+  // With `only_moved`, only the samples on (output) or nearest (input) a face with a point moved since the
+  // last measure are measured again: the others' distances cannot have grown, since the face they were
+  // measured to is where it was, so the pulls stay upper bounds (the RMS stage's guard needs no more).
+  double sample(bool only_moved = false) {
+    std::vector<char> moved;
+    if (only_moved) {
+      moved.resize(points_.size());
+      for (std::size_t p = 0; p < points_.size(); ++p) moved[p] = points_[p] != measured_at_[p];
+    }
+    auto needs = [&](Index face) {
+      if (!only_moved) return true;
+      const auto& c = corners_[face];
+      return moved[c[0]] || moved[c[1]] || moved[c[2]];
+    };
+    measured_at_ = points_;
     refresh_output();
     const detail::AabbTree output_tree(output_);
     const std::size_t per_face = grid_.size();
@@ -179,12 +180,12 @@ class Refitter {
       pull.distance = std::sqrt(hit.squared_distance);
       pull.direction = pull.distance > 0 ? Vec((hit.point - q) / pull.distance) : Vec::Zero();
     };
-    auto largest_of = [](std::vector<Pull>& pulls, const auto& measure) {
+    auto largest_of = [&](std::vector<Pull>& pulls, const auto& measure) {
       return tbb::parallel_reduce(
           tbb::blocked_range<std::size_t>(0, pulls.size()), 0.0,
           [&](const tbb::blocked_range<std::size_t>& range, double largest) {
             for (std::size_t s = range.begin(); s != range.end(); ++s) {
-              measure(s);
+              if (needs(pulls[s].face)) measure(s);
               largest = std::max(largest, pulls[s].distance);
             }
             return largest;
@@ -195,16 +196,114 @@ class Refitter {
   }
 
   static constexpr double kGrow = 1.25;
+  static constexpr int kGuardRounds = 4;  // send-backs per step before the RMS stage gives the step up
+
+  // Measures every sample at the current positions, unless the last measure was of them.
+  double measure(RefitReport& report) {
+    if (!measured_) ++report.passes, largest_ = sample();
+    measured_ = false;  // the caller moves the points next
+    return largest_;
+  }
+  double sum_of_squares() const {
+    double sum = 0;
+    for (const auto* pulls : {&input_pulls_, &output_pulls_})
+      for (const Pull& pull : *pulls) sum += pull.distance * pull.distance;
+    return sum;
+  }
+  double sampled_rms(double sum) const { return std::sqrt(sum / std::max<std::size_t>(1, input_pulls_.size() + output_pulls_.size())); }
+
+  // The first stage: towards the largest sampled distance (weights (d / d_max)^exponent).
+  void fit_largest(RefitReport& report) {
+    if (o_.passes == 0) return;
+    std::vector<Vec> best = points_, step(points_.size(), Vec::Zero());
+    double best_max = std::numeric_limits<double>::infinity(), scale = o_.step;
+    bool best_measured = false;
+    for (int pass = 0; pass < o_.passes; ++pass) {
+      const double sampled_max = measure(report);
+      if (pass == 0) report.sampled_max_before = sampled_max, report.sampled_rms_before = sampled_rms(sum_of_squares());
+      best_measured = sampled_max < best_max;
+      if (best_measured) {
+        best_max = sampled_max, best = points_, report.steps += pass > 0;
+        if (sampled_max == 0 || pass + 1 == o_.passes) break;
+        solve(sampled_max, o_.exponent, step);
+        if (pass > 0) scale = std::min(1.0, scale * kGrow);
+      } else {
+        // Farther: back to the best positions, with half the step.
+        scale *= 0.5;
+        if (scale < o_.step / 16) break;
+      }
+      propose(best, step, scale);
+    }
+    points_ = best;
+    measured_ = best_measured;  // the pulls are those of the best positions: the next stage starts from them
+    report.sampled_max_after = best_max;
+    report.sampled_rms_after = sampled_rms(sum_of_squares());
+  }
+
+  // The second stage: towards the least sum of squared sampled distances, under the guard.
+  void fit_squares(RefitReport& report) {
+    if (o_.rms_passes == 0) return;
+    std::vector<Vec> best = points_, step(points_.size(), Vec::Zero());
+    std::vector<double> allowed_input, allowed_output;  // each sample's guard at the best positions
+    double best_sum = std::numeric_limits<double>::infinity(), limit = 0, scale = o_.step;
+    auto breaks_guard = [](const std::vector<Pull>& pulls, const std::vector<double>& allowed, std::size_t s) {
+      return pulls[s].distance > allowed[s];
+    };
+    for (int pass = 0; pass < o_.rms_passes; ++pass) {
+      double largest = measure(report);
+      if (pass == 0) {
+        limit = o_.rms_guard * largest;
+        if (o_.passes == 0) report.sampled_max_before = largest, report.sampled_rms_before = sampled_rms(sum_of_squares());
+      }
+      bool within = true;
+      for (int round = 0; pass > 0; ++round) {
+        // Samples past their guard send the corners of their faces back; those faces' neighbours then
+        // have new shapes, which hold_back() checks again.
+        bool sent_back = false;
+        within = true;
+        for (const auto& [pulls, allowed] : {std::pair{&input_pulls_, &allowed_input}, std::pair{&output_pulls_, &allowed_output}})
+          for (std::size_t s = 0; s < pulls->size(); ++s)
+            if (breaks_guard(*pulls, *allowed, s)) {
+              within = false;
+              for (const Index p : corners_[(*pulls)[s].face])
+                if (points_[p] != best[p]) points_[p] = best[p], sent_back = true;
+            }
+        if (within || !sent_back || round == kGuardRounds) break;
+        hold_back(best);
+        largest = sample(/*only_moved=*/true);
+      }
+      const double sum = sum_of_squares();
+      if (within && sum < best_sum) {
+        best_sum = sum, best = points_, report.rms_steps += pass > 0;
+        report.sampled_max_after = std::max(report.sampled_max_after, largest);
+        report.sampled_rms_after = sampled_rms(sum);
+        auto guard = [&](const std::vector<Pull>& pulls, std::vector<double>& allowed) {
+          allowed.resize(pulls.size());
+          // (with a margin for rounding: a sample that stays put must not break it by an ulp)
+          for (std::size_t s = 0; s < pulls.size(); ++s) allowed[s] = std::max(limit, pulls[s].distance) + 1e-9 * limit;
+        };
+        guard(input_pulls_, allowed_input), guard(output_pulls_, allowed_output);
+        if (pass + 1 == o_.rms_passes) break;
+        solve(largest, 0.0, step);
+        if (pass > 0) scale = std::min(1.0, scale * kGrow);
+      } else {
+        scale *= 0.5;
+        if (scale < o_.step / 16) break;
+      }
+      propose(best, step, scale);
+    }
+    points_ = best;
+  }
 
   // Each point's least-squares move: the delta that would take its samples' distances to zero.
-  void solve(double sampled_max, std::vector<Vec>& step) const {
+  void solve(double sampled_max, double exponent, std::vector<Vec>& step) const {
     std::vector<Eigen::Matrix3d> normal_matrix(points_.size(), Eigen::Matrix3d::Zero());
     std::vector<Vec> rhs(points_.size(), Vec::Zero());
     std::vector<double> farthest(points_.size(), 0.0);
     for (const auto* pulls : {&input_pulls_, &output_pulls_})
       for (const Pull& pull : *pulls) {
         if (pull.distance == 0) continue;
-        const double weight = std::pow(pull.distance / sampled_max, o_.exponent);
+        const double weight = exponent == 0 ? 1.0 : std::pow(pull.distance / sampled_max, exponent);
         const Eigen::Matrix3d uu = pull.direction * pull.direction.transpose();
         for (int k = 0; k < 3; ++k) {
           const double b = pull.bary[k];
@@ -286,6 +385,9 @@ class Refitter {
   std::vector<Vec> grid_;
   std::vector<Pull> input_pulls_, output_pulls_;
   std::vector<Index> face_hint_;  // per output face: an input face near its centroid (facing_against's hint)
+  std::vector<Vec> measured_at_;  // the positions the pulls were last measured at
+  bool measured_ = false;         // the pulls are those of the current positions
+  double largest_ = 0;            // and this their largest distance
 };
 
 }  // namespace
@@ -296,11 +398,14 @@ bool needs_refit(const Mesh& input, const Mesh& simplified, const RefitOptions& 
                  std::span<const Index> face_origin) {
   if (options.passes < 0) throw Error(fmt::format("refit: passes must not be negative, got {}", options.passes));
   if (!(options.step > 0 && options.step <= 1)) throw Error(fmt::format("refit: step must be in (0, 1], got {}", options.step));
+  if (options.rms_passes < 0) throw Error(fmt::format("refit: RMS passes must not be negative, got {}", options.rms_passes));
+  if (!(options.rms_guard >= 0 && options.rms_guard <= 1))
+    throw Error(fmt::format("refit: the RMS guard must be in [0, 1], got {}", options.rms_guard));
   if (!(options.exponent >= 0 && options.exponent <= 64))
     throw Error(fmt::format("refit: exponent must be between 0 and 64, got {}", options.exponent));
   if (!face_origin.empty() && face_origin.size() != static_cast<std::size_t>(simplified.num_faces()))
     throw Error(fmt::format("refit: {} face origins for {} faces", face_origin.size(), simplified.num_faces()));
-  return options.passes > 0 && input.num_faces() > 0 && simplified.num_faces() > 0;
+  return options.passes + options.rms_passes > 0 && input.num_faces() > 0 && simplified.num_faces() > 0;
 }
 
 // The input's points (once per position; vertices no face uses are not part of the surface) and its

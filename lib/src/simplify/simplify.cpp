@@ -29,6 +29,8 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
                             *options.max_total_normal_change_deg));
   if (options.refit_passes && *options.refit_passes < 0)
     throw Error(fmt::format("simplify: refit passes must not be negative, got {}", *options.refit_passes));
+  if (options.refit_rms_passes && *options.refit_rms_passes < 0)
+    throw Error(fmt::format("simplify: refit RMS passes must not be negative, got {}", *options.refit_rms_passes));
   if (options.lane_faces && *options.lane_faces < 0)
     throw Error(fmt::format("simplify: faces per lane must not be negative, got {}", *options.lane_faces));
   if (options.max_valence && *options.max_valence < 0)
@@ -59,11 +61,11 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   } else {
     r = detail::Engine(mesh, options).run(target);
   }
-  if (const int passes = detail::refit_passes(mesh, options); passes > 0 && !options.record_collapses && r.collapses > 0) {
-    // The faces keep within the limits the collapses kept: the same turn from their input faces.
-    const double total_turn = r.turn_limit_relaxed_at ? detail::kRelaxedTotalTurnDeg : detail::starting_total_turn_deg(options);
-    r.refit = refit_to_input(mesh, r.mesh, detail::refit_options(options, passes, total_turn), r.face_origin);
-  }
+  // The faces keep within the limits the collapses kept: the same turn from their input faces.
+  const double total_turn = r.turn_limit_relaxed_at ? detail::kRelaxedTotalTurnDeg : detail::starting_total_turn_deg(options);
+  if (const RefitOptions refit = detail::refit_options(mesh, options, total_turn);
+      detail::refits(refit) && !options.record_collapses && r.collapses > 0)
+    r.refit = refit_to_input(mesh, r.mesh, refit, r.face_origin);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
@@ -71,8 +73,11 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
 
 namespace detail {
 
-RefitOptions refit_options(const SimplifyOptions& options, int passes, double total_turn_deg) {
+RefitOptions refit_options(const Mesh& mesh, const SimplifyOptions& options, double total_turn_deg) {
   const InvertedFaces inverted = options.inverted_faces.value_or(default_inverted_faces(options.method));
+  const int passes = options.preserve_topology ? options.refit_passes.value_or(default_refit_passes(options.method, mesh.num_faces())) : 0;
+  // The second stage follows the first by default; asked for alone, it runs alone.
+  const int rms_passes = options.preserve_topology ? options.refit_rms_passes.value_or(passes > 0 ? kDefaultRefitRmsPasses : 0) : 0;
   // hoppe's energy fits the squared distances already, and a refit weighted less steeply keeps its RMS
   // (bunny -> 1 %: RMS 0.127 % -> 0.111 % with exponent 2, 0.122 % with 6; docs/benchmarks-log.md).
   return {.passes = passes,
@@ -81,7 +86,8 @@ RefitOptions refit_options(const SimplifyOptions& options, int passes, double to
           .max_total_turn_deg = total_turn_deg,
           .min_triangle_quality = options.min_triangle_quality,
           .avoid_inverted = inverted != InvertedFaces::Allow,
-          .fix_boundary = options.lock_boundary};
+          .fix_boundary = options.lock_boundary,
+          .rms_passes = rms_passes};
 }
 
 }  // namespace detail

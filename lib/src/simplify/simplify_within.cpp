@@ -102,8 +102,8 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   ExtractedLevel level = extract_level(pm, hi, VertexOrder::Input);
 
   std::optional<RefitReport> refit;
-  if (const int passes = detail::refit_passes(mesh, options); passes > 0 && pm.max_level() > 0) {
-    const RefitOptions refit_options = detail::refit_options(options, passes, detail::starting_total_turn_deg(options));
+  if (const RefitOptions refit_options = detail::refit_options(mesh, options, detail::starting_total_turn_deg(options));
+      detail::refits(refit_options) && pm.max_level() > 0) {
     RefitSearch search = search_refit_levels(pm, source, max_distance, hi, refit_options);
     within.checks += search.checks;
     if (search.best) {

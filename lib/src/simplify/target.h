@@ -17,11 +17,6 @@ inline Index requested_faces(const Mesh& mesh, const SimplifyOptions& options) {
   return target;
 }
 
-/// The refit passes `options` ask for (by method and size when unset), or 0 where no refit runs.
-inline int refit_passes(const Mesh& mesh, const SimplifyOptions& options) {
-  if (!options.preserve_topology) return 0;
-  return options.refit_passes.value_or(default_refit_passes(options.method, mesh.num_faces()));
-}
 
 /// The total turn a default limit relaxes to where it alone would stop a run short (Engine::relax_total_turn()):
 /// the most that never lets a face face against its input self.
@@ -34,8 +29,12 @@ inline double starting_total_turn_deg(const SimplifyOptions& options) {
                   options.max_normal_change_deg);
 }
 
-/// The refit's options from the simplification's: its limits, and weights by method. `total_turn_deg`:
+/// The refit's options from the simplification's of `mesh`: its passes in both stages (by method and size
+/// where unset; none without preserve_topology), its limits, and weights by method. `total_turn_deg`:
 /// how far a face may turn from its reference orientation (see refit_to_input()).
-RefitOptions refit_options(const SimplifyOptions& options, int passes, double total_turn_deg);
+RefitOptions refit_options(const Mesh& mesh, const SimplifyOptions& options, double total_turn_deg);
+
+/// Whether a refit with these options does anything.
+inline bool refits(const RefitOptions& options) { return options.passes + options.rms_passes > 0; }
 
 }  // namespace lodkit::detail
