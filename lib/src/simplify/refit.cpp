@@ -196,6 +196,16 @@ class Refitter {
   }
 
   static constexpr double kGrow = 1.25;
+
+  // The fraction of each vertex's move a step takes: it grows after a kept step (but the first) and
+  // halves after a failed one; a stage ends when it falls below a sixteenth of where it started.
+  struct StepFraction {
+    double value, first;
+    void kept(int pass) {
+      if (pass > 0) value = std::min(1.0, value * kGrow);
+    }
+    bool failed() { return (value *= 0.5) >= first / 16; }
+  };
   static constexpr int kGuardRounds = 4;  // send-backs per step before the RMS stage gives the step up
 
   // Measures every sample at the current positions, unless the last measure was of them.
@@ -216,28 +226,28 @@ class Refitter {
   void fit_largest(RefitReport& report) {
     if (o_.passes == 0) return;
     std::vector<Vec> best = points_, step(points_.size(), Vec::Zero());
-    double best_max = std::numeric_limits<double>::infinity(), scale = o_.step;
+    double best_max = std::numeric_limits<double>::infinity(), best_rms = 0;
+    StepFraction scale{o_.step, o_.step};
     bool best_measured = false;
     for (int pass = 0; pass < o_.passes; ++pass) {
       const double sampled_max = measure(report);
-      if (pass == 0) report.sampled_max_before = sampled_max, report.sampled_rms_before = sampled_rms(sum_of_squares());
+      const double rms = sampled_rms(sum_of_squares());
+      if (pass == 0) report.sampled_max_before = sampled_max, report.sampled_rms_before = rms;
       best_measured = sampled_max < best_max;
       if (best_measured) {
-        best_max = sampled_max, best = points_, report.steps += pass > 0;
+        best_max = sampled_max, best_rms = rms, best = points_, report.steps += pass > 0;
         if (sampled_max == 0 || pass + 1 == o_.passes) break;
         solve(sampled_max, o_.exponent, step);
-        if (pass > 0) scale = std::min(1.0, scale * kGrow);
-      } else {
-        // Farther: back to the best positions, with half the step.
-        scale *= 0.5;
-        if (scale < o_.step / 16) break;
+        scale.kept(pass);
+      } else if (!scale.failed()) {  // farther: back to the best positions, with half the step
+        break;
       }
-      propose(best, step, scale);
+      propose(best, step, scale.value);
     }
     points_ = best;
     measured_ = best_measured;  // the pulls are those of the best positions: the next stage starts from them
     report.sampled_max_after = best_max;
-    report.sampled_rms_after = sampled_rms(sum_of_squares());
+    report.sampled_rms_after = best_rms;
   }
 
   // The second stage: towards the least sum of squared sampled distances, under the guard.
@@ -245,7 +255,8 @@ class Refitter {
     if (o_.rms_passes == 0) return;
     std::vector<Vec> best = points_, step(points_.size(), Vec::Zero());
     std::vector<double> allowed_input, allowed_output;  // each sample's guard at the best positions
-    double best_sum = std::numeric_limits<double>::infinity(), limit = 0, scale = o_.step;
+    double best_sum = std::numeric_limits<double>::infinity(), limit = 0;
+    StepFraction scale{o_.step, o_.step};
     auto breaks_guard = [](const std::vector<Pull>& pulls, const std::vector<double>& allowed, std::size_t s) {
       return pulls[s].distance > allowed[s];
     };
@@ -285,12 +296,11 @@ class Refitter {
         guard(input_pulls_, allowed_input), guard(output_pulls_, allowed_output);
         if (pass + 1 == o_.rms_passes) break;
         solve(largest, 0.0, step);
-        if (pass > 0) scale = std::min(1.0, scale * kGrow);
-      } else {
-        scale *= 0.5;
-        if (scale < o_.step / 16) break;
+        scale.kept(pass);
+      } else if (!scale.failed()) {
+        break;
       }
-      propose(best, step, scale);
+      propose(best, step, scale.value);
     }
     points_ = best;
   }
