@@ -37,11 +37,13 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <span>
 #include <unordered_map>
 
 #include "core/geometry.h"
 #include "simplify/refit_input.h"
+#include "simplify/target.h"
 
 namespace lodkit {
 namespace {
@@ -104,8 +106,7 @@ class Refitter {
   RefitReport run() {
     RefitReport report;
     const std::vector<Vec> start = points_;
-    fit_largest(report);
-    fit_squares(report);
+    fit_squares(report, fit_largest(report));
     for (std::size_t p = 0; p < points_.size(); ++p) report.moved_vertices += points_[p] != start[p];
     refresh_output();
     return report;
@@ -208,11 +209,9 @@ class Refitter {
   };
   static constexpr int kGuardRounds = 4;  // send-backs per step before the RMS stage gives the step up
 
-  // Measures every sample at the current positions, unless the last measure was of them.
   double measure(RefitReport& report) {
-    if (!measured_) ++report.passes, largest_ = sample();
-    measured_ = false;  // the caller moves the points next
-    return largest_;
+    ++report.passes;
+    return sample();
   }
   double sum_of_squares() const {
     double sum = 0;
@@ -222,9 +221,11 @@ class Refitter {
   }
   double sampled_rms(double sum) const { return std::sqrt(sum / std::max<std::size_t>(1, input_pulls_.size() + output_pulls_.size())); }
 
-  // The first stage: towards the largest sampled distance (weights (d / d_max)^exponent).
-  void fit_largest(RefitReport& report) {
-    if (o_.passes == 0) return;
+  // The first stage: towards the largest sampled distance (weights (d / d_max)^exponent). Returns that
+  // distance where the pulls are left as measured at the positions it keeps, so the next stage need not
+  // measure them again.
+  std::optional<double> fit_largest(RefitReport& report) {
+    if (o_.passes == 0) return std::nullopt;
     std::vector<Vec> best = points_, step(points_.size(), Vec::Zero());
     double best_max = std::numeric_limits<double>::infinity(), best_rms = 0;
     StepFraction scale{o_.step, o_.step};
@@ -245,23 +246,21 @@ class Refitter {
       propose(best, step, scale.value);
     }
     points_ = best;
-    measured_ = best_measured;  // the pulls are those of the best positions: the next stage starts from them
     report.sampled_max_after = best_max;
     report.sampled_rms_after = best_rms;
+    return best_measured ? std::optional(best_max) : std::nullopt;
   }
 
   // The second stage: towards the least sum of squared sampled distances, under the guard.
-  void fit_squares(RefitReport& report) {
+  // `measured`: the largest sampled distance, where the pulls are those of the current positions.
+  void fit_squares(RefitReport& report, std::optional<double> measured) {
     if (o_.rms_passes == 0) return;
     std::vector<Vec> best = points_, step(points_.size(), Vec::Zero());
     std::vector<double> allowed_input, allowed_output;  // each sample's guard at the best positions
     double best_sum = std::numeric_limits<double>::infinity(), limit = 0;
     StepFraction scale{o_.step, o_.step};
-    auto breaks_guard = [](const std::vector<Pull>& pulls, const std::vector<double>& allowed, std::size_t s) {
-      return pulls[s].distance > allowed[s];
-    };
     for (int pass = 0; pass < o_.rms_passes; ++pass) {
-      double largest = measure(report);
+      double largest = pass == 0 && measured ? *measured : measure(report);
       if (pass == 0) {
         limit = o_.rms_guard * largest;
         if (o_.passes == 0) report.sampled_max_before = largest, report.sampled_rms_before = sampled_rms(sum_of_squares());
@@ -274,7 +273,7 @@ class Refitter {
         within = true;
         for (const auto& [pulls, allowed] : {std::pair{&input_pulls_, &allowed_input}, std::pair{&output_pulls_, &allowed_output}})
           for (std::size_t s = 0; s < pulls->size(); ++s)
-            if (breaks_guard(*pulls, *allowed, s)) {
+            if ((*pulls)[s].distance > (*allowed)[s]) {
               within = false;
               for (const Index p : corners_[(*pulls)[s].face])
                 if (points_[p] != best[p]) points_[p] = best[p], sent_back = true;
@@ -396,8 +395,6 @@ class Refitter {
   std::vector<Pull> input_pulls_, output_pulls_;
   std::vector<Index> face_hint_;  // per output face: an input face near its centroid (facing_against's hint)
   std::vector<Vec> measured_at_;  // the positions the pulls were last measured at
-  bool measured_ = false;         // the pulls are those of the current positions
-  double largest_ = 0;            // and this their largest distance
 };
 
 }  // namespace
@@ -415,7 +412,7 @@ bool needs_refit(const Mesh& input, const Mesh& simplified, const RefitOptions& 
     throw Error(fmt::format("refit: exponent must be between 0 and 64, got {}", options.exponent));
   if (!face_origin.empty() && face_origin.size() != static_cast<std::size_t>(simplified.num_faces()))
     throw Error(fmt::format("refit: {} face origins for {} faces", face_origin.size(), simplified.num_faces()));
-  return options.passes + options.rms_passes > 0 && input.num_faces() > 0 && simplified.num_faces() > 0;
+  return refits(options) && input.num_faces() > 0 && simplified.num_faces() > 0;
 }
 
 // The input's points (once per position; vertices no face uses are not part of the surface) and its

@@ -17,7 +17,6 @@ inline Index requested_faces(const Mesh& mesh, const SimplifyOptions& options) {
   return target;
 }
 
-
 /// The total turn a default limit relaxes to where it alone would stop a run short (Engine::relax_total_turn()):
 /// the most that never lets a face face against its input self.
 constexpr double kRelaxedTotalTurnDeg = 90.0;
