@@ -79,7 +79,7 @@ TEST(AabbTree, ClosestMatchesBruteForceWhateverTheHint) {
 
 // Every answer of a prepared tree on m, at probes near it `offsets` off the surface (each from three
 // hints: none, the probe's own face, a random one; and again from the hint it left), must be the
-// brute-force one, and both answers must occur, so that neither a constant nor a skip that always says
+// brute-force one (and the hint left where there was none, the nearest face), and both answers must occur, so that neither a constant nor a skip that always says
 // "no" passes.
 void expect_brute_force_answers(const Mesh& m, std::initializer_list<double> offsets, int probes, unsigned seed) {
   AabbTree tree(m);
@@ -91,9 +91,13 @@ void expect_brute_force_answers(const Mesh& m, std::initializer_list<double> off
     for (const Probe& probe : probes_near(m, probes, offset, seed + static_cast<unsigned>(offset * 1000))) {
       const bool expected = brute_facing_against(m, probe.point, probe.normal);
       for (Index hint : {Index{-1}, probe.source, face(rng)}) {
+        const bool without_hint = hint < 0;
         ASSERT_EQ(tree.facing_against(probe.point, probe.normal, hint), expected)
             << "point " << probe.point.transpose() << " normal " << probe.normal.transpose();
         ASSERT_GE(hint, 0);
+        // Without a hint, it leaves the nearest face as the next one: a far face (the nearest the
+        // search did not pass over) would make every later call search again.
+        if (without_hint) ASSERT_EQ(hint, brute_closest(m, probe.point).first);
         ASSERT_EQ(tree.facing_against(probe.point, probe.normal, hint), expected);
       }
       against += expected;

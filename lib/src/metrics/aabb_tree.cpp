@@ -377,7 +377,9 @@ bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& n
       if (c.settles_within(p, normal, (q - p).norm())) return false;
     }
   }
-  if (!sides_.empty()) return nearest_faces_against(p, normal, normal / length, hint);
+  // Without a hint, the nearest face itself: nearest_faces_against() may return a face far from p
+  // (the nearest outside the nodes it passed over), and as the next hint that would never settle.
+  if (hint >= 0 && !sides_.empty()) return nearest_faces_against(p, normal, normal / length, hint);
   const Hit hit = closest(p, hint);
   hint = hit.face;
   if (hit.face < 0) return false;
