@@ -97,7 +97,9 @@ void expect_brute_force_answers(const Mesh& m, std::initializer_list<double> off
         ASSERT_GE(hint, 0);
         // Without a hint, it leaves the nearest face as the next one: a far face (the nearest the
         // search did not pass over) would make every later call search again.
-        if (without_hint) ASSERT_EQ(hint, brute_closest(m, probe.point).first);
+        if (without_hint) {
+          ASSERT_EQ(hint, brute_closest(m, probe.point).first);
+        }
         ASSERT_EQ(tree.facing_against(probe.point, probe.normal, hint), expected);
       }
       against += expected;
