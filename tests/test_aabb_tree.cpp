@@ -79,8 +79,8 @@ TEST(AabbTree, ClosestMatchesBruteForceWhateverTheHint) {
 
 // Every answer of a prepared tree on m, at probes near it `offsets` off the surface (each from three
 // hints: none, the probe's own face, a random one; and again from the hint it left), must be the
-// brute-force one (and the hint left where there was none, the nearest face), and both answers must occur, so that neither a constant nor a skip that always says
-// "no" passes.
+// brute-force one (and the hint left where there was none, the nearest face), and both answers must
+// occur, so that neither a constant nor a skip that always says "no" passes.
 void expect_brute_force_answers(const Mesh& m, std::initializer_list<double> offsets, int probes, unsigned seed) {
   AabbTree tree(m);
   tree.prepare_facing();
