@@ -418,8 +418,8 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
     refuse_unless(m != "schroeder",
                   {"--placement", "--preserve-boundary", "--lock-boundary", "--allow-topology-change",
                    "--max-normal-change", "--max-total-normal-change", "--crease-weight", "--attribute-weights",
-                   "--lane-faces", "--max-valence", "--refit-passes", "--refit-rms-passes", "--inverted-faces", "--no-inverted-faces", "--max-hausdorff",
-                   "--pixel-error"},
+                   "--lane-faces", "--max-valence", "--refit-passes", "--refit-rms-passes", "--inverted-faces",
+                   "--no-inverted-faces", "--max-hausdorff", "--pixel-error"},
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
     refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",

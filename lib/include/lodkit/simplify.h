@@ -293,7 +293,7 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options = {});
 /// too, but the output's own bound is proved (result.within). Unrefit, the output equals simplify()
 /// with refit_passes = 0 to the same face count, except on meshes large enough for lanes (see
 /// lane_faces), whose progressive mesh runs one queue. Slower than simplify(): the bunny (69k faces)
-/// takes 2.8-6.3 s with the refit search (0.5-0.8 s without), igea_loop1 (1M, no refit) 6.5-8 s. `error` is
+/// takes 4.0-5.9 s with the refit search (0.5-0.8 s without), igea_loop1 (1M, no refit) 6.2-7.6 s. `error` is
 /// not estimated here (0).
 /// \throw Error for an invalid mesh or options, or a negative or non-finite `max_distance`.
 SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const SimplifyOptions& options = {});

@@ -29,8 +29,9 @@ class AabbTree {
   /// face without area faces neither way. `hint`: a face near p, or -1; on return, a face near p to
   /// start from next time (the nearest, where there was none). Where the faces around the hint all lie
   /// within a narrow cone of normals far enough out from p, the answer follows without a search (see
-  /// the .cpp); without prepare_facing(), every call searches. `hint_certificate`: the hint's certificate, where the caller
-  /// keeps a copy of it (certificate(hint)), saving the two lookups. Safe to call from several threads.
+  /// the .cpp); without prepare_facing(), every call searches. `hint_certificate`: the hint's
+  /// certificate, where the caller keeps a copy of it (certificate(hint)), saving the two lookups. Safe
+  /// to call from several threads.
   struct Certificate;
   bool facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint,
                       const Certificate* hint_certificate = nullptr) const;

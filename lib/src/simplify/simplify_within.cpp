@@ -99,8 +99,8 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   const ProvedLevel proved = prove_level_within(pm, source, max_distance);
   Index hi = proved.level;
   SimplifyResult::HausdorffLimit within = proved.proof;
-  ExtractedLevel level = extract_level(pm, hi, VertexOrder::Input);
 
+  std::optional<ExtractedLevel> level;  // the refit level found, else the proved one (extracted below)
   std::optional<RefitReport> refit;
   if (const RefitOptions refit_options = detail::refit_options(mesh, options, detail::starting_total_turn_deg(options));
       detail::refits(refit_options) && pm.max_level() > 0) {
@@ -108,7 +108,7 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
     within.checks += search.checks;
     if (search.best) {
       hi = search.level;
-      level = std::move(search.best->level);
+      level.emplace(std::move(search.best->level));
       refit = search.best->report;
       within.bound = search.best->check.bound;
       within.coarser_faces.reset();
@@ -120,11 +120,13 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
     }
   }
 
+  if (!level) level.emplace(extract_level(pm, hi, VertexOrder::Input));
+
   SimplifyResult r;
   r.refit = refit;
-  r.mesh = std::move(level.mesh);
+  r.mesh = std::move(level->mesh);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
-  r.vertex_origin = std::move(level.vertex_origin);
+  r.vertex_origin = std::move(level->vertex_origin);
   r.faces_in = mesh.num_faces();
   r.vertices_in = mesh.num_vertices();
   r.faces_out = r.mesh.num_faces();
