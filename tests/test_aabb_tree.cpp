@@ -110,6 +110,44 @@ void expect_brute_force_answers(const Mesh& m, std::initializer_list<double> off
   EXPECT_LT(against, total - total / 20);
 }
 
+// closest_facing(): the nearest point on the faces that face the given way, as a scan over them finds
+// it, and no face where none does. Between a thin lens's sheets and where tori cross, the nearest face
+// often faces the other way, so a search that ignored the side would fail.
+TEST(AabbTree, ClosestFacingMatchesBruteForce) {
+  TorusOptions torus_options;
+  torus_options.major_segments = 24, torus_options.minor_segments = 12;
+  Mesh crossed = make_torus(torus_options);
+  crossed.positions.col(2) *= -1;  // mirrored: faces inward, crossing the first torus
+  crossed.positions.col(0).array() += 0.5;
+  for (const Mesh& m : {test::thin_lens(), concatenated(make_torus(torus_options), crossed)}) {
+    AabbTree tree(m);
+    tree.prepare_facing();
+    int differs = 0;
+    for (const Probe& probe : probes_near(m, 600, 0.05, 41)) {
+      double expected = std::numeric_limits<double>::infinity();
+      for (Index f = 0; f < m.num_faces(); ++f) {
+        const Eigen::Vector3d a = corner(m, f, 0), b = corner(m, f, 1), c = corner(m, f, 2);
+        if ((b - a).cross(c - a).dot(probe.normal) > 0)
+          expected = std::min(expected, (detail::closest_point_on_triangle(probe.point, a, b, c) - probe.point).squaredNorm());
+      }
+      const AabbTree::Hit hit = tree.closest_facing(probe.point, probe.normal);
+      ASSERT_GE(hit.face, 0);
+      EXPECT_DOUBLE_EQ(hit.squared_distance, expected);
+      EXPECT_NEAR((hit.point - probe.point).squaredNorm(), expected, 1e-12);
+      const Eigen::Vector3d n = (corner(m, hit.face, 1) - corner(m, hit.face, 0)).cross(corner(m, hit.face, 2) - corner(m, hit.face, 0));
+      EXPECT_GT(n.dot(probe.normal), 0);
+      differs += hit.squared_distance > tree.closest(probe.point).squared_distance;
+    }
+    EXPECT_GT(differs, 30);  // the side mattered
+  }
+  const Mesh one = test::single_triangle();
+  AabbTree tree(one);
+  tree.prepare_facing();
+  const Eigen::Vector3d n = (corner(one, 0, 1) - corner(one, 0, 0)).cross(corner(one, 0, 2) - corner(one, 0, 0));
+  EXPECT_EQ(tree.closest_facing(corner(one, 0, 0), -n).face, -1);
+  EXPECT_EQ(tree.closest_facing(corner(one, 0, 0), n).face, 0);
+}
+
 // A thin lens has two sheets a hundredth apart, facing opposite ways: near the rim and between the
 // sheets, the nearest face may lie on the far sheet, where a skip on the near sheet's cone would be
 // wrong.

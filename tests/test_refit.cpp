@@ -174,6 +174,53 @@ TEST(Refit, NoFaceComesToFaceAgainstTheInputOnAThinLens) {
   }
 }
 
+// A square sheet of n x n quads at height z, facing up or down.
+Mesh sheet(double z, int n, bool up) {
+  Mesh m;
+  m.positions.resize((n + 1) * (n + 1), 3);
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) m.positions.row(i * (n + 1) + j) << double(i) / n, double(j) / n, z;
+  m.triangles.resize(2 * n * n, 3);
+  Index row = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const Index a = i * (n + 1) + j, b = a + n + 1, c = b + 1, d = a + 1;
+      if (up) m.triangles.row(row++) << a, b, c, m.triangles.row(row++) << a, c, d;
+      else m.triangles.row(row++) << a, c, b, m.triangles.row(row++) << a, d, c;
+    }
+  return m;
+}
+
+TEST(Refit, FacesFacingAgainstTheInputTurnToTheSheetThatFacesTheirWay) {
+  // Two sheets back to back a twentieth apart (the lower facing up, the upper down), as where two parts
+  // touch, and a coarse copy of each lying nearer the other's: each face of the copy faces against the
+  // input face nearest it. Moved onto its own sheet, every face faces the input's way and lies on it.
+  const double gap = 0.05;
+  const Mesh input = concatenated(sheet(0, 4, true), sheet(gap, 4, false));
+  const Mesh swapped = concatenated(sheet(0.7 * gap, 1, true), sheet(0.3 * gap, 1, false));
+  ASSERT_EQ(count_flipped_faces(input, swapped), 4);
+  Mesh refit = swapped;
+  const RefitReport report = refit_to_input(input, refit, {.passes = 0, .rms_passes = 1});  // that step alone
+  EXPECT_EQ(report.inverted_before, 4);
+  EXPECT_EQ(report.inverted_after, 0);
+  EXPECT_GE(report.turn_steps, 1);
+  EXPECT_EQ(count_flipped_faces(input, refit), 0);
+  EXPECT_LT(compare(input, refit).hausdorff_bound, 1e-9);
+  EXPECT_EQ(refit.triangles, swapped.triangles);
+  // With both stages as simplify() runs them (here the first stage alone may turn them), where the copy
+  // is the smaller, so that the sheets' rims set the largest distance.
+  Mesh wider = input;
+  wider.positions.leftCols(2) = (wider.positions.leftCols(2).array() * 1.5 - 0.25).matrix();
+  Mesh both = swapped;
+  refit_to_input(wider, both, {});
+  EXPECT_EQ(count_flipped_faces(wider, both), 0);
+  EXPECT_LE(compare(wider, both).hausdorff_bound, compare(wider, swapped).hausdorff);
+  // Not at all where the caller allows such faces.
+  Mesh allowed = swapped;
+  EXPECT_EQ(refit_to_input(input, allowed, {.passes = 0, .avoid_inverted = false, .rms_passes = 1}).turn_steps, 0);
+  EXPECT_EQ(count_flipped_faces(input, allowed), 4);
+}
+
 TEST(Refit, BadOptionsAreErrors) {
   const Mesh fine = test::bumpy_sphere(2, 0.03);
   Mesh coarse = unrefit(fine, 0.3).mesh;

@@ -271,6 +271,8 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     if (r.refit)
       j["refit"] = {{"passes", r.refit->passes}, {"steps", r.refit->steps}, {"rms_steps", r.refit->rms_steps},
                     {"moved_vertices", r.refit->moved_vertices},
+                    {"inverted_before", r.refit->inverted_before}, {"inverted_after", r.refit->inverted_after},
+                    {"turn_steps", r.refit->turn_steps},
                     {"sampled_max_before", r.refit->sampled_max_before},
                     {"sampled_max_before_percent", r.refit->sampled_max_before * pct},
                     {"sampled_max_after", r.refit->sampled_max_after},
@@ -302,6 +304,9 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       fmt::print(stderr, "  refit: largest sampled distance {:.4f}% -> {:.4f}%, RMS {:.5f}% -> {:.5f}%, in {} + {} steps ({:.3f} s)\n",
                  r.refit->sampled_max_before * pct, r.refit->sampled_max_after * pct, r.refit->sampled_rms_before * pct,
                  r.refit->sampled_rms_after * pct, r.refit->steps, r.refit->rms_steps, r.refit->seconds);
+    if (r.refit && r.refit->inverted_before > 0)
+      fmt::print(stderr, "  refit: {} of {} faces facing against the input turned to face it, in {} rounds\n",
+                 r.refit->inverted_before - r.refit->inverted_after, r.refit->inverted_before, r.refit->turn_steps);
     if (r.dropped_degenerate_faces > 0)
       fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
                  thousands(r.dropped_degenerate_faces));

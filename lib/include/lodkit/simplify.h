@@ -98,6 +98,10 @@ struct RefitReport {
   int passes = 0;             ///< sampling passes made, in both stages
   int steps = 0;              ///< steps that lowered the sampled maximum (first stage)
   int rms_steps = 0;          ///< steps that lowered the sum of squared distances within the guard (second stage)
+  /// Faces facing against the input face nearest their centroid, before and after the rounds between
+  /// the stages that move them towards the input's faces that face their way (avoid_inverted only).
+  Index inverted_before = 0, inverted_after = 0;
+  int turn_steps = 0;         ///< those rounds kept
   Index moved_vertices = 0;   ///< welded points moved
   double seconds = 0.0;
 };

@@ -292,6 +292,36 @@ bool AabbTree::nearest_faces_against(const Eigen::Vector3d& p, const Eigen::Vect
   return true;
 }
 
+AabbTree::Hit AabbTree::closest_facing(const Eigen::Vector3d& p, const Eigen::Vector3d& normal) const {
+  Hit best{p, std::numeric_limits<double>::infinity(), -1};
+  const double length = normal.norm();
+  if (normals_.empty() || order_.empty() || !(length > 0)) return best;
+  const Eigen::Vector3d against = -normal / length;
+  NodeStack stack;
+  stack.push(0, box_squared_distance(nodes_[0].box, p));
+  while (stack.top > 0) {
+    --stack.top;
+    if (stack.distance[stack.top] > best.squared_distance) continue;
+    const int i = stack.node[stack.top];
+    if (sides_[i].all_same(against)) continue;  // every face in it faces the other way
+    const Node& node = nodes_[i];
+    if (node.count > 0) {
+      for (int s = node.first; s < node.first + node.count; ++s) {
+        const Index f = order_[s];
+        if (!(normals_[f].dot(normal) > 0)) continue;
+        const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
+                                                            mesh_.positions.row(mesh_.triangles(f, 1)),
+                                                            mesh_.positions.row(mesh_.triangles(f, 2)));
+        const double d = (q - p).squaredNorm();
+        if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best = {q, d, f};
+      }
+      continue;
+    }
+    stack.push_children(nodes_, node, p);
+  }
+  return best;
+}
+
 AabbTree::Certificate AabbTree::leaf_certificate(int leaf) const {
   const Node& node = nodes_[leaf];
   const Cone& cone = cones_[leaf];

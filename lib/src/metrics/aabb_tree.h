@@ -36,6 +36,10 @@ class AabbTree {
   bool facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint,
                       const Certificate* hint_certificate = nullptr) const;
 
+  /// Closest point to `p` on the faces that face the way of `normal` (positive dot with it); face -1
+  /// where none does. Needs prepare_facing().
+  Hit closest_facing(const Eigen::Vector3d& p, const Eigen::Vector3d& normal) const;
+
   /// What facing_against() may conclude without a search, for the faces of one leaf: a normal n with
   /// axis . n > min_dot |n|, asked about at a point p with 2 |p - anchor| < clearance, faces the same
   /// way as the face nearest p. 32 bytes: a caller that asks about the same place again and again may
