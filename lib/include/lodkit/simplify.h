@@ -79,7 +79,9 @@ struct RefitOptions {
   /// before the refit.
   double max_total_turn_deg = 60.0;
   double min_triangle_quality = 0.02;  ///< as in SimplifyOptions; a face already below it may not get worse
-  bool avoid_inverted = true;          ///< no face may come to face against the input face nearest its centroid
+  /// No face may come to face against the input face nearest its centroid; those that do already move
+  /// towards the nearest input face that faces their way, between the stages.
+  bool avoid_inverted = true;
   bool fix_boundary = false;           ///< boundary vertices stay put (vertices on non-manifold edges always do)
   /// Passes of the second stage, towards the least sum of squared distances (the RMS) with unit
   /// weights, in which no sample may get farther than the larger of its own distance and rms_guard times
