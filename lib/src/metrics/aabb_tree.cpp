@@ -115,6 +115,24 @@ void AabbTree::build(int node, int free, int begin, int end, std::vector<Centred
   out.box = nodes_[left].box.merged(nodes_[right].box);
 }
 
+template <typename Skip, typename Visit>
+void AabbTree::descend(const Eigen::Vector3d& p, const double& bound, Skip skip, Visit visit) const {
+  NodeStack stack;
+  stack.push(0, box_squared_distance(nodes_[0].box, p));
+  while (stack.top > 0) {
+    --stack.top;
+    if (stack.distance[stack.top] > bound) continue;
+    const int i = stack.node[stack.top];
+    if (skip(i)) continue;
+    const Node& node = nodes_[i];
+    if (node.count > 0) {
+      for (int slot = node.first; slot < node.first + node.count; ++slot) visit(slot);
+      continue;
+    }
+    stack.push_children(nodes_, node, p);
+  }
+}
+
 AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
   Hit best{p, std::numeric_limits<double>::infinity(), -1};
   auto test_corners = [&](Index f, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
@@ -126,29 +144,18 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
     test_corners(hint, mesh_.positions.row(mesh_.triangles(hint, 0)), mesh_.positions.row(mesh_.triangles(hint, 1)),
                  mesh_.positions.row(mesh_.triangles(hint, 2)));
   if (nodes_.empty() || order_.empty()) return best;
-  NodeStack stack;
-  stack.push(0, box_squared_distance(nodes_[0].box, p));
-  while (stack.top > 0) {
-    --stack.top;
-    if (stack.distance[stack.top] > best.squared_distance) continue;
-    const Node& node = nodes_[stack.node[stack.top]];
-    if (node.count > 0) {
-      for (int i = node.first; i < node.first + node.count; ++i) {
-        const Index f = order_[i];
-        if (corners_.empty()) {
-          test_corners(f, mesh_.positions.row(mesh_.triangles(f, 0)), mesh_.positions.row(mesh_.triangles(f, 1)),
-                       mesh_.positions.row(mesh_.triangles(f, 2)));
-          continue;
-        }
-        // The face's own box first: most faces of a leaf lie farther than the best found so far.
-        const auto& t = corners_[i];
-        const Eigen::Vector3d lo = t[0].cwiseMin(t[1]).cwiseMin(t[2]), hi = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
-        if ((p - p.cwiseMax(lo).cwiseMin(hi)).squaredNorm() <= best.squared_distance) test_corners(f, t[0], t[1], t[2]);
-      }
-      continue;
+  descend(p, best.squared_distance, [](int) { return false; }, [&](int slot) {
+    const Index f = order_[slot];
+    if (corners_.empty()) {
+      test_corners(f, mesh_.positions.row(mesh_.triangles(f, 0)), mesh_.positions.row(mesh_.triangles(f, 1)),
+                   mesh_.positions.row(mesh_.triangles(f, 2)));
+      return;
     }
-    stack.push_children(nodes_, node, p);
-  }
+    // The face's own box first: most faces of a leaf lie farther than the best found so far.
+    const auto& t = corners_[slot];
+    const Eigen::Vector3d lo = t[0].cwiseMin(t[1]).cwiseMin(t[2]), hi = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
+    if ((p - p.cwiseMax(lo).cwiseMin(hi)).squaredNorm() <= best.squared_distance) test_corners(f, t[0], t[1], t[2]);
+  });
   return best;
 }
 
@@ -250,24 +257,13 @@ bool AabbTree::nearest_faces_against(const Eigen::Vector3d& p, const Eigen::Vect
     if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best.squared_distance = d, best.face = f;
   };
   if (hint >= 0) test_face(hint);
-  NodeStack stack;
-  stack.push(0, box_squared_distance(nodes_[0].box, p));
-  while (stack.top > 0) {
-    --stack.top;
-    if (stack.distance[stack.top] > best.squared_distance) continue;
-    const int i = stack.node[stack.top];
-    if (sides_[i].all_same(unit)) continue;
-    const Node& node = nodes_[i];
-    if (node.count > 0) {
-      for (int s = node.first; s < node.first + node.count; ++s) test_face(order_[s]);
-      continue;
-    }
-    stack.push_children(nodes_, node, p);
-  }
+  descend(p, best.squared_distance, [&](int i) { return sides_[i].all_same(unit); },
+          [&](int slot) { test_face(order_[slot]); });
   if (best.face < 0) return false;
   hint = best.face;
   if (!(normals_[best.face].dot(normal) < 0)) return false;
   // The flag: inside a node the first search passed over.
+  NodeStack stack;
   stack.push(0, box_squared_distance(nodes_[0].box, p));
   while (stack.top > 0) {
     --stack.top;
@@ -297,28 +293,16 @@ AabbTree::Hit AabbTree::closest_facing(const Eigen::Vector3d& p, const Eigen::Ve
   const double length = normal.norm();
   if (normals_.empty() || order_.empty() || !(length > 0)) return best;
   const Eigen::Vector3d against = -normal / length;
-  NodeStack stack;
-  stack.push(0, box_squared_distance(nodes_[0].box, p));
-  while (stack.top > 0) {
-    --stack.top;
-    if (stack.distance[stack.top] > best.squared_distance) continue;
-    const int i = stack.node[stack.top];
-    if (sides_[i].all_same(against)) continue;  // every face in it faces the other way
-    const Node& node = nodes_[i];
-    if (node.count > 0) {
-      for (int s = node.first; s < node.first + node.count; ++s) {
-        const Index f = order_[s];
-        if (!(normals_[f].dot(normal) > 0)) continue;
-        const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
-                                                            mesh_.positions.row(mesh_.triangles(f, 1)),
-                                                            mesh_.positions.row(mesh_.triangles(f, 2)));
-        const double d = (q - p).squaredNorm();
-        if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best = {q, d, f};
-      }
-      continue;
-    }
-    stack.push_children(nodes_, node, p);
-  }
+  // (Nodes whose faces all face the other way are passed over.)
+  descend(p, best.squared_distance, [&](int i) { return sides_[i].all_same(against); }, [&](int slot) {
+    const Index f = order_[slot];
+    if (!(normals_[f].dot(normal) > 0)) return;
+    const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
+                                                        mesh_.positions.row(mesh_.triangles(f, 1)),
+                                                        mesh_.positions.row(mesh_.triangles(f, 2)));
+    const double d = (q - p).squaredNorm();
+    if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best = {q, d, f};
+  });
   return best;
 }
 

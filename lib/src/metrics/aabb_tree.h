@@ -86,6 +86,11 @@ class AabbTree {
   /// Fills in `node` over slots [begin, end) of `centred` (order_ to be); its descendants take indices
   /// from `free` on.
   void build(int node, int free, int begin, int end, std::vector<Centred>& centred);
+  /// The depth-first search of the closest-point queries: visits the leaves nearer p than `bound` (which
+  /// visit(slot) may lower as it goes; slot: a place in order_), nearer first, passing over the nodes
+  /// skip(node) rules out.
+  template <typename Skip, typename Visit>
+  void descend(const Eigen::Vector3d& p, const double& bound, Skip skip, Visit visit) const;
   /// Distance from p to the nearest face whose normal is more than `angle` from unit `axis`, or
   /// `limit` if there is none nearer.
   double distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vector3d& axis, double angle, double limit) const;
