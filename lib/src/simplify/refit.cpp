@@ -321,7 +321,7 @@ class Refitter {
   // towards the nearest input face that faces their way. The collapses let such faces be where the
   // others cost far more, and they lie where two sheets of the input face each other: parts in contact
   // or back to back, a thin part's two sides, crossing components. Such a face's own sheet is almost
-  // always within the error already (on the shared meshes at 10 % and 1 %, its centroid lies 0.1-0.6
+  // always within the error already (on the shared meshes at 10 % and 1 %, its centroid lies 0.01-0.63
   // times the Hausdorff distance from it), so the move costs little, and it is held to that: under the
   // RMS stage's guard with the largest sampled distance as its limit, no sample may get farther than
   // the larger of its own distance and the largest. Each face moves its centroid onto that sheet,
