@@ -322,11 +322,12 @@ class Refitter {
   // others cost far more, and they lie where two sheets of the input face each other: parts in contact
   // or back to back, a thin part's two sides, crossing components. Such a face's own sheet is almost
   // always within the error already (on the shared meshes at 10 % and 1 %, its centroid lies 0.01-0.63
-  // times the Hausdorff distance from it), so the move costs little, and it is held to that: under the
-  // RMS stage's guard with the largest sampled distance as its limit, no sample may get farther than
-  // the larger of its own distance and the largest. Each face moves its centroid onto that sheet,
-  // points shared by several such faces by their mean; a round is kept only if fewer such faces are
-  // left. `measured`: as fit_squares() takes it; returns the same for the positions kept.
+  // times the Hausdorff distance from it), so the move costs little, and it is held to that by the RMS
+  // stage's guard: no sample may get farther than the larger of its own distance and rms_guard times
+  // the largest (the largest itself as the limit left 7 fewer such faces over the shared meshes, at RMS
+  // x 1.0005). Each face moves its centroid onto that sheet, points shared by several such faces by their
+  // mean; a round is kept only if fewer such faces are left. `measured`: as fit_squares() takes it;
+  // returns the same for the positions kept.
   std::optional<double> turn_inverted(RefitReport& report, std::optional<double> measured) {
     if (!o_.avoid_inverted) return measured;
     std::vector<Index> inverted = inverted_faces();
