@@ -343,32 +343,21 @@ double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vecto
   // when none of its faces can be.
   const double cos_angle = std::cos(angle), sin_angle = std::sin(angle);
   double best = limit * limit;
-  NodeStack stack;
-  stack.push(0, box_squared_distance(nodes_[0].box, p));
-  while (stack.top > 0) {
-    --stack.top;
-    if (stack.distance[stack.top] >= best) continue;
-    const int i = stack.node[stack.top];
-    const Node& node = nodes_[i];
+  auto none_turned = [&](int i) {
     const Cone& cone = cones_[i];
-    if (cone.half_angle < 0) continue;  // no face with area
+    if (cone.half_angle < 0) return true;  // no face with area
     // angle(axis, cone axis) + half angle <= angle, as cos(angle - half angle) <= axis . cone axis
-    if (cone.half_angle <= angle &&
-        axis.dot(cone.axis) >= cos_angle * cone.cos_half + sin_angle * cone.sin_half + kCosineSlack)
-      continue;
-    if (node.count > 0) {
-      for (int s = node.first; s < node.first + node.count; ++s) {
-        const Index f = order_[s];
-        if (normals_[f] == Eigen::Vector3d::Zero() || axis.dot(normals_[f]) >= cos_angle + kCosineSlack) continue;
-        const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
-                                                            mesh_.positions.row(mesh_.triangles(f, 1)),
-                                                            mesh_.positions.row(mesh_.triangles(f, 2)));
-        best = std::min(best, (q - p).squaredNorm());
-      }
-      continue;
-    }
-    stack.push_children(nodes_, node, p);
-  }
+    return cone.half_angle <= angle &&
+           axis.dot(cone.axis) >= cos_angle * cone.cos_half + sin_angle * cone.sin_half + kCosineSlack;
+  };
+  descend(p, best, none_turned, [&](int slot) {
+    const Index f = order_[slot];
+    if (normals_[f] == Eigen::Vector3d::Zero() || axis.dot(normals_[f]) >= cos_angle + kCosineSlack) return;
+    const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
+                                                        mesh_.positions.row(mesh_.triangles(f, 1)),
+                                                        mesh_.positions.row(mesh_.triangles(f, 2)));
+    best = std::min(best, (q - p).squaredNorm());
+  });
   return std::sqrt(best);
 }
 
