@@ -77,6 +77,71 @@ TEST(AabbTree, ClosestMatchesBruteForceWhateverTheHint) {
   }
 }
 
+// The search reads its boxes as floats, with a margin for rounding that grows with the coordinates:
+// far from the origin it must still find the exact nearest face (the margin may only cost time), and
+// trees of a leaf or two (no level to skip) must answer too.
+TEST(AabbTree, ClosestMatchesBruteForceFarFromTheOriginAndOnTinyTrees) {
+  TorusOptions small;
+  small.major_radius = 1e-3, small.minor_radius = 2.5e-4;
+  // (At 1000, a float is 6e-5 apart from the next: coarser than the 1e-3 torus's smaller faces, and far
+  // coarser than the probes' distances.)
+  for (const Eigen::Vector3d& offset : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1000.3, -999.7, 1000.1), Eigen::Vector3d(3e5, -1e6, 7e4)}) {
+    Mesh torus = make_torus(small);
+    torus.positions.rowwise() += offset.transpose();
+    const AabbTree tree(torus);
+    for (const Probe& probe : probes_near(torus, 500, 2e-6, 5)) {
+      const auto [face_expected, d_expected] = brute_closest(torus, probe.point);
+      const AabbTree::Hit hit = tree.closest(probe.point, -1);
+      EXPECT_EQ(hit.face, face_expected) << "offset " << offset.transpose();
+      EXPECT_EQ(hit.squared_distance, d_expected);
+    }
+  }
+  // Beyond a float's range (squared distances past 3.4e38) the boxes are read in doubles.
+  Mesh huge = make_torus({});
+  huge.positions *= 1e30;
+  const AabbTree huge_tree(huge);
+  for (const Probe& probe : probes_near(huge, 200, 0.3e30, 7)) {
+    const auto [face_expected, d_expected] = brute_closest(huge, probe.point);
+    EXPECT_EQ(huge_tree.closest(probe.point).face, face_expected);
+  }
+  // Where a float rounds a point's gap to a box up past the best distance so far, the box must stay in
+  // the search: p lies 4e-5 below face 0 at height z0 ~ 1000, where floats lie 6.1e-5 apart (so p may
+  // round to the float below z0's), and the hint, a wide face centred far off in the other leaf, lies
+  // 1.01 times that below p.
+  for (int k = 0; k < 64; ++k) {
+    const double z0 = 1000 + (k % 2 ? 0.37e-6 * k : std::ldexp(k, -10)), gap = 4e-5;
+    Mesh m;
+    m.positions.resize(24, 3);
+    m.triangles.resize(8, 3);
+    auto add = [&](int f, Eigen::Vector3d a, Eigen::Vector3d b, Eigen::Vector3d c) {
+      m.positions.row(3 * f) = a.transpose(), m.positions.row(3 * f + 1) = b.transpose(), m.positions.row(3 * f + 2) = c.transpose();
+      m.triangles.row(f) = Eigen::Matrix<Index, 1, 3>(3 * f, 3 * f + 1, 3 * f + 2);
+    };
+    add(0, {0, 0, z0}, {1, 0, z0}, {0, 1, z0});
+    for (int f = 1; f < 4; ++f) add(f, {2.0 * f, 0, z0 + 1}, {2.0 * f + 1, 0, z0 + 1}, {2.0 * f, 1, z0 + 1});
+    const double below = z0 - gap - 1.01 * gap;
+    add(4, {-1, -1, below}, {60, -1, below}, {-1, 3, below});
+    for (int f = 5; f < 8; ++f) add(f, {20.0 + f, 0, z0 + 1}, {21.0 + f, 0, z0 + 1}, {20.0 + f, 1, z0 + 1});
+    const AabbTree tree(m);
+    const Eigen::Vector3d p(0.2, 0.2, z0 - gap);
+    EXPECT_EQ(tree.closest(p, 4).face, 0) << "z0 " << z0;
+  }
+  for (const int faces : {1, 3, 4, 5, 7, 9, 17}) {
+    Mesh strip;
+    strip.positions.resize(faces + 2, 3);
+    strip.triangles.resize(faces, 3);
+    for (int i = 0; i < faces + 2; ++i) strip.positions.row(i) = Eigen::RowVector3d(0.5 * i, i % 2, 0.1 * i * i);
+    for (int f = 0; f < faces; ++f) strip.triangles.row(f) = Eigen::Matrix<Index, 1, 3>(f, f + 1, f + 2);
+    const AabbTree tree(strip);
+    for (const Probe& probe : probes_near(strip, 50, 1.0, 9)) {
+      const auto [face_expected, d_expected] = brute_closest(strip, probe.point);
+      const AabbTree::Hit hit = tree.closest(probe.point);
+      EXPECT_EQ(hit.face, face_expected) << faces << " faces";
+      EXPECT_EQ(hit.squared_distance, d_expected);
+    }
+  }
+}
+
 // Every answer of a prepared tree on m, at probes near it `offsets` off the surface (each from three
 // hints: none, the probe's own face, a random one; and again from the hint it left), must be the
 // brute-force one (and the hint left where there was none, the nearest face), and both answers must

@@ -1,10 +1,17 @@
 #include "metrics/aabb_tree.h"
 
+#include <fmt/format.h>
+#include <lodkit/error.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <type_traits>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
@@ -76,6 +83,12 @@ AabbTree::AabbTree(const Mesh& mesh, bool copy_corners) : mesh_(mesh) {
   });
   nodes_.resize(n > 0 ? static_cast<std::size_t>(subtree_nodes(static_cast<int>(n))) : 1);
   if (n > 0) build(0, 1, 0, static_cast<int>(n), centred);
+  if (n > kMostFaces) throw Error(fmt::format("{} faces: the closest-point search takes at most {}", n, kMostFaces));
+  if (n > 0) extent_ = std::max(nodes_[0].box.min().cwiseAbs().maxCoeff(), nodes_[0].box.max().cwiseAbs().maxCoeff());
+  if (n > 0 && nodes_[0].count == 0) {
+    quads_.reserve(nodes_.size() / 3 + 1);
+    build_quad(0);
+  }
   if (copy_corners) corners_.resize(static_cast<std::size_t>(n));
   tbb::parallel_for(Index{0}, n, [&](Index i) {
     order_[i] = centred[i].face;
@@ -115,21 +128,147 @@ void AabbTree::build(int node, int free, int begin, int end, std::vector<Centred
   out.box = nodes_[left].box.merged(nodes_[right].box);
 }
 
+int AabbTree::build_quad(int node) {
+  const int index = static_cast<int>(quads_.size());
+  quads_.emplace_back();
+  Quad quad;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int lane = 0; lane < 4; ++lane)
+      quad.lo[axis][lane] = std::numeric_limits<float>::infinity(), quad.hi[axis][lane] = -std::numeric_limits<float>::infinity();
+  std::fill_n(quad.node, 4, -1);
+  std::fill_n(quad.next, 4, -1);
+  auto set_lane = [&](int lane, int i) {
+    const Eigen::AlignedBox3d& box = nodes_[i].box;
+    for (int axis = 0; axis < 3; ++axis) {
+      float lo = static_cast<float>(box.min()[axis]), hi = static_cast<float>(box.max()[axis]);
+      if (lo > box.min()[axis]) lo = std::nextafter(lo, -std::numeric_limits<float>::infinity());
+      if (hi < box.max()[axis]) hi = std::nextafter(hi, std::numeric_limits<float>::infinity());
+      quad.lo[axis][lane] = lo, quad.hi[axis][lane] = hi;
+    }
+    quad.node[lane] = i;
+    if (nodes_[i].count > 0) quad.next[lane] = -1 - (nodes_[i].first * 4 + nodes_[i].count - 1);
+  };
+  for (int side = 0; side < 2; ++side) {
+    const int child = nodes_[node].first + side;
+    if (nodes_[child].count > 0) {
+      set_lane(2 * side, child);
+      continue;
+    }
+    for (int k = 0; k < 2; ++k) set_lane(2 * side + k, nodes_[child].first + k);
+  }
+  for (int lane = 0; lane < 4; ++lane)
+    if (quad.node[lane] >= 0 && nodes_[quad.node[lane]].count == 0) quad.next[lane] = build_quad(quad.node[lane]);
+  quads_[index] = quad;
+  return index;
+}
+
+namespace {
+// What the closest-point search passes over: nothing (the other searches pass over nodes by their cones).
+struct NoSkip {
+  bool operator()(int) const { return false; }
+};
+
+// The nodes a search through the quads has yet to visit, as in NodeStack, each with its Quad::next.
+struct QuadStack {
+  int node[128], next[128];
+  double distance[128];
+  int top = 0;
+  void push(int i, int n, double d) { node[top] = i, next[top] = n, distance[top] = d, ++top; }
+};
+
+// A quad's four squared box distances from p, as lower bounds of the exact ones, in floats: p rounds to
+// floats by up to 2^-24 |p| an axis (taken off each axis's distance, with the largest coordinate
+// standing for |p|), and the differences, squares and sums by 2^-24 each (a factor 1 - 2^-20 covers
+// them); the boxes were rounded outwards. Where coordinates or squared distances could leave a
+// float's range (beyond kFloatReach), in doubles.
+struct QuadDistances {
+  static constexpr double kFloatReach = 1e15;
+  QuadDistances(const Eigen::Vector3d& p, double tree_extent) : point(p) {
+    const double extent = p.cwiseAbs().maxCoeff();
+    in_floats = std::max(extent, tree_extent) <= kFloatReach;
+    for (int axis = 0; axis < 3; ++axis) at[axis] = static_cast<float>(p[axis]);
+    slack = static_cast<float>(extent * 0x1p-23) + std::numeric_limits<float>::min();
+  }
+  Eigen::Vector3d point;
+  bool in_floats;
+  float at[3], slack;
+  static constexpr float kShrink = 1.0f - 0x1p-20f;
+
+  void operator()(const float (&lo)[3][4], const float (&hi)[3][4], double out[4]) const {
+    if (!in_floats) {
+      for (int lane = 0; lane < 4; ++lane) {
+        double sum = 0;
+        for (int axis = 0; axis < 3; ++axis) {
+          const double off = std::max(std::max(double(lo[axis][lane]) - point[axis], point[axis] - double(hi[axis][lane])), 0.0);
+          sum += off * off;
+        }
+        out[lane] = sum;
+      }
+      return;
+    }
+    float d[4];
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps(), margin = _mm_set1_ps(slack);
+    __m128 sum = zero;
+    for (int axis = 0; axis < 3; ++axis) {
+      const __m128 p = _mm_set1_ps(at[axis]);
+      __m128 off = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(lo[axis]), p), _mm_sub_ps(p, _mm_load_ps(hi[axis]))), zero);
+      off = _mm_max_ps(_mm_sub_ps(off, margin), zero);
+      sum = _mm_add_ps(sum, _mm_mul_ps(off, off));
+    }
+    _mm_storeu_ps(d, _mm_mul_ps(sum, _mm_set1_ps(kShrink)));
+#else
+    for (int lane = 0; lane < 4; ++lane) {
+      float sum = 0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const float off = std::max(std::max(lo[axis][lane] - at[axis], at[axis] - hi[axis][lane]), 0.0f);
+        const float less = std::max(off - slack, 0.0f);
+        sum += less * less;
+      }
+      d[lane] = sum * kShrink;
+    }
+#endif
+    for (int lane = 0; lane < 4; ++lane) out[lane] = d[lane];
+  }
+};
+}  // namespace
+
 template <typename Skip, typename Visit>
 void AabbTree::descend(const Eigen::Vector3d& p, const double& bound, Skip skip, Visit visit) const {
-  NodeStack stack;
-  stack.push(0, box_squared_distance(nodes_[0].box, p));
+  if (order_.empty()) return;
+  const QuadDistances distances(p, extent_);
+  QuadStack stack;
+  const Node& root = nodes_[0];
+  stack.push(0, quads_.empty() ? -1 - (root.first * 4 + root.count - 1) : 0, box_squared_distance(root.box, p));
   while (stack.top > 0) {
     --stack.top;
     if (stack.distance[stack.top] > bound) continue;
     const int i = stack.node[stack.top];
     if (skip(i)) continue;
-    const Node& node = nodes_[i];
-    if (node.count > 0) {
-      for (int slot = node.first; slot < node.first + node.count; ++slot) visit(slot);
+    if (const int next = stack.next[stack.top]; next < 0) {
+      const int first = (-1 - next) >> 2, count = ((-1 - next) & 3) + 1;
+      for (int slot = first; slot < first + count; ++slot) visit(slot);
       continue;
     }
-    stack.push_children(nodes_, node, p);
+    const Quad& quad = quads_[stack.next[stack.top]];
+    double d[4];
+    distances(quad.lo, quad.hi, d);
+    // The middle level's own test: lanes under a child that is passed over go too.
+    if constexpr (!std::is_same_v<Skip, NoSkip>) {
+      const Node& node = nodes_[i];
+      for (int side = 0; side < 2; ++side)
+        if (const int child = node.first + side; nodes_[child].count == 0 && skip(child))
+          d[2 * side] = d[2 * side + 1] = std::numeric_limits<double>::infinity();
+    }
+    // Nearer first on top: pushed farthest first.
+    int lanes[4], n = 0;
+    for (int lane = 0; lane < 4; ++lane) {
+      if (!(d[lane] <= bound)) continue;
+      int at = n++;
+      for (; at > 0 && d[lanes[at - 1]] < d[lane]; --at) lanes[at] = lanes[at - 1];
+      lanes[at] = lane;
+    }
+    for (int k = 0; k < n; ++k) stack.push(quad.node[lanes[k]], quad.next[lanes[k]], d[lanes[k]]);
   }
 }
 
@@ -144,7 +283,7 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
     test_corners(hint, mesh_.positions.row(mesh_.triangles(hint, 0)), mesh_.positions.row(mesh_.triangles(hint, 1)),
                  mesh_.positions.row(mesh_.triangles(hint, 2)));
   if (nodes_.empty() || order_.empty()) return best;
-  descend(p, best.squared_distance, [](int) { return false; }, [&](int slot) {
+  descend(p, best.squared_distance, NoSkip{}, [&](int slot) {
     const Index f = order_[slot];
     if (corners_.empty()) {
       test_corners(f, mesh_.positions.row(mesh_.triangles(f, 0)), mesh_.positions.row(mesh_.triangles(f, 1)),

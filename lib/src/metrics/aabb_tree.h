@@ -83,9 +83,24 @@ class AabbTree {
     Eigen::Vector3f centre;
     Index face;
   };
+  // The searches' layout: the tree with every other level left out. An inner node's quad holds the
+  // nodes two levels below it (lanes 0-1 under its first child, 2-3 under its second; a child that is
+  // a leaf takes its first lane itself), with their boxes side by side in floats rounded outwards:
+  // one pop tests four boxes from two cache lines, where the binary tree took two pops and four
+  // scattered boxes. Half the pops, and the same answers: the distances to the float boxes are lower
+  // bounds of those to the exact boxes (see QuadDistances), so they rule out no face the exact ones
+  // would keep.
+  struct alignas(64) Quad {
+    float lo[3][4], hi[3][4];  // per axis, per lane; an empty lane lies at infinity
+    std::int32_t node[4];      // per lane: its node in nodes_, or -1
+    std::int32_t next[4];      // per lane: its own quad, or for a leaf -1 - (first slot * 4 + count - 1)
+  };
+  static constexpr Index kMostFaces = Index{1} << 29;  // leaves' slots as Quad::next encodes them
   /// Fills in `node` over slots [begin, end) of `centred` (order_ to be); its descendants take indices
   /// from `free` on.
   void build(int node, int free, int begin, int end, std::vector<Centred>& centred);
+  /// Appends the quad of inner node `node`, and those below it; returns its index.
+  int build_quad(int node);
   /// The depth-first search of the closest-point queries: visits the leaves nearer p than `bound` (which
   /// visit(slot) may lower as it goes; slot: a place in order_), nearer first, passing over the nodes
   /// skip(node) rules out.
@@ -102,6 +117,8 @@ class AabbTree {
                              Index& hint) const;
   const Mesh& mesh_;
   std::vector<Node> nodes_;
+  std::vector<Quad> quads_;  // quads_[0]: the root's (none when the root is a leaf)
+  double extent_ = 0;        // the largest coordinate's magnitude
   std::vector<Index> order_;
   std::vector<std::array<Eigen::Vector3d, 3>> corners_;  // per slot of order_ (or none): its face's corners
   // prepare_facing():
