@@ -59,11 +59,13 @@ std::vector<Probe> probes_near(const Mesh& m, int count, double offset, unsigned
   return probes;
 }
 
-// With and without the tree's copy of the corners (whose faces are first ruled out by their own boxes).
+// With and without the tree's copy of the corners (whose faces are first ruled out by their own boxes),
+// split by surface area or at the median.
 TEST(AabbTree, ClosestMatchesBruteForceWhateverTheHint) {
   const Mesh torus = make_torus({});
-  for (const bool copy_corners : {true, false}) {
-    const AabbTree tree(torus, copy_corners);
+  for (const AabbTree::Options& options : {AabbTree::Options{}, AabbTree::Options{.copy_corners = false},
+                                           AabbTree::Options{.copy_corners = false, .surface_area_splits = false}}) {
+    const AabbTree tree(torus, options);
     std::mt19937 rng(3);
     std::uniform_int_distribution<Index> face(0, torus.num_faces() - 1);
     for (const Probe& probe : probes_near(torus, 400, 0.5, 11)) {
@@ -146,8 +148,9 @@ TEST(AabbTree, ClosestMatchesBruteForceFarFromTheOriginAndOnTinyTrees) {
 // hints: none, the probe's own face, a random one; and again from the hint it left), must be the
 // brute-force one (and the hint left where there was none, the nearest face), and both answers must
 // occur, so that neither a constant nor a skip that always says "no" passes.
-void expect_brute_force_answers(const Mesh& m, std::initializer_list<double> offsets, int probes, unsigned seed) {
-  AabbTree tree(m);
+void expect_brute_force_answers(const Mesh& m, std::initializer_list<double> offsets, int probes, unsigned seed,
+                                bool surface_area_splits = true) {
+  AabbTree tree(m, {.copy_corners = true, .surface_area_splits = surface_area_splits});
   tree.prepare_facing();
   std::mt19937 rng(seed);
   std::uniform_int_distribution<Index> face(0, m.num_faces() - 1);
@@ -216,8 +219,10 @@ TEST(AabbTree, ClosestFacingMatchesBruteForce) {
 // A thin lens has two sheets a hundredth apart, facing opposite ways: near the rim and between the
 // sheets, the nearest face may lie on the far sheet, where a skip on the near sheet's cone would be
 // wrong.
+// (With median splits too: the simplifier's tree of the input.)
 TEST(AabbTree, FacingAgainstMatchesBruteForceOnTwoCloseSheets) {
-  expect_brute_force_answers(test::thin_lens(), {0.0, 0.004, 0.03}, 1500, 17);
+  for (const bool surface_area_splits : {true, false})
+    expect_brute_force_answers(test::thin_lens(), {0.0, 0.004, 0.03}, 1500, 17, surface_area_splits);
 }
 
 // Where the search cannot pass over a node for its side: two tori that cross each other (faces of
@@ -230,10 +235,12 @@ TEST(AabbTree, FacingAgainstMatchesBruteForceOnCrossingPartsAndSharpEdges) {
   Mesh crossed = make_torus(torus_options);
   const Eigen::Matrix3d turn = Eigen::AngleAxisd(1.5707963267948966, Eigen::Vector3d::UnitX()).toRotationMatrix();
   crossed.positions = (crossed.positions * turn.transpose()).rowwise() + Eigen::RowVector3d(1.0, 0.0, 0.0);
-  expect_brute_force_answers(concatenated(make_torus(torus_options), crossed), {0.0, 0.05, 0.4}, 800, 23);
   BoxOptions box_options;
   box_options.divisions = 6;
-  expect_brute_force_answers(make_box(box_options), {0.0, 0.05, 0.4}, 800, 29);
+  for (const bool surface_area_splits : {true, false}) {
+    expect_brute_force_answers(concatenated(make_torus(torus_options), crossed), {0.0, 0.05, 0.4}, 800, 23, surface_area_splits);
+    expect_brute_force_answers(make_box(box_options), {0.0, 0.05, 0.4}, 800, 29, surface_area_splits);
+  }
 }
 
 TEST(AabbTree, FacingAgainstHandlesFacesWithoutAreaAndFacesBackToBackPreparedOrNot) {

@@ -5,15 +5,24 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace lodkit::detail {
 
 class AabbTree {
  public:
-  /// `copy_corners`: keep a copy of every face's corners in the tree's order (72 bytes a face), which
-  /// makes closest() about 15 % faster; facing_against() does not use it.
-  explicit AabbTree(const Mesh& mesh, bool copy_corners = true);
+  struct Options {
+    /// Keep a copy of every face's corners in the tree's order (72 bytes a face), which makes closest()
+    /// about 15 % faster; facing_against() does not use it.
+    bool copy_corners = true;
+    /// Split nodes where the surface area heuristic says rather than at the median: on CAD meshes a
+    /// query then visits half the nodes, on scans a tenth fewer; it takes about 1.7 times as long to
+    /// build (igea_loop1: 0.19 s against 0.11 s on two cores).
+    bool surface_area_splits = true;
+  };
+  AabbTree(const Mesh& mesh, const Options& options);
+  explicit AabbTree(const Mesh& mesh) : AabbTree(mesh, Options{}) {}
 
   struct Hit {
     Eigen::Vector3d point;
@@ -79,10 +88,18 @@ class AabbTree {
     double half_angle;  // radians, never too small; < 0: the node has no face with area
     double cos_half = 1, sin_half = 0;  // set once every cone is known
   };
+  // A face while the tree is built, in floats (they only decide the tree's shape, never an answer): its
+  // centroid, and for surface-area splits its box.
   struct Centred {
     Eigen::Vector3f centre;
     Index face;
   };
+  struct Boxed : Centred {
+    Eigen::Vector3f lo, hi;
+  };
+  /// The tree over `entries` (Centred or Boxed), which end in order_'s order.
+  template <typename Entry>
+  void build_tree(std::vector<Entry>& entries);
   // The searches' layout: the tree with every other level left out. An inner node's quad holds the
   // nodes two levels below it (lanes 0-1 under its first child, 2-3 under its second; a child that is
   // a leaf takes its first lane itself), with their boxes side by side in floats rounded outwards:
@@ -96,9 +113,14 @@ class AabbTree {
     std::int32_t next[4];      // per lane: its own quad, or for a leaf -1 - (first slot * 4 + count - 1)
   };
   static constexpr Index kMostFaces = Index{1} << 29;  // leaves' slots as Quad::next encodes them
-  /// Fills in `node` over slots [begin, end) of `centred` (order_ to be); its descendants take indices
-  /// from `free` on.
-  void build(int node, int free, int begin, int end, std::vector<Centred>& centred);
+  /// The tree over slots [begin, end) of `entries` (order_ to be): the top's splits side by side, down
+  /// to parts of at most kParallelFaces faces (see the .cpp).
+  struct Part;
+  template <typename Entry>
+  std::unique_ptr<Part> split_top(int begin, int end, std::vector<Entry>& entries) const;
+  /// Fills in node `at` of `nodes` over those slots, its descendants from `next` on (advanced past them).
+  template <typename Entry>
+  void build(std::vector<Node>& nodes, int at, int& next, int begin, int end, std::vector<Entry>& entries) const;
   /// Appends the quad of inner node `node`, and those below it; returns its index.
   int build_quad(int node);
   /// The depth-first search of the closest-point queries: visits the leaves nearer p than `bound` (which
