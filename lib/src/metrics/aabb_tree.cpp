@@ -22,6 +22,7 @@ namespace lodkit::detail {
 
 namespace {
 constexpr int kLeafSize = 4;
+static_assert(kLeafSize <= 4, "Quad::next holds a leaf's face count in two bits");
 constexpr int kParallelFaces = 1 << 14;  // subtrees larger than this are built side by side
 
 // facing_against() skips the search where every face near p turns less than kTurn from a cone that
