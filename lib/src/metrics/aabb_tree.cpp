@@ -246,6 +246,7 @@ void AabbTree::build_tree(std::vector<Entry>& entries) {
   };
   join(join, *top, 0);
   tbb::parallel_for(0, n, [&](int i) { order_[i] = entries[i].face; });
+  std::vector<Entry>().swap(entries);  // before the quads are made: not both at the peak
 }
 
 template <typename Entry>

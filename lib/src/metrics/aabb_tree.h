@@ -97,7 +97,7 @@ class AabbTree {
   struct Boxed : Centred {
     Eigen::Vector3f lo, hi;
   };
-  /// The tree over `entries` (Centred or Boxed), which end in order_'s order.
+  /// The tree over `entries` (Centred or Boxed), which it frees when done.
   template <typename Entry>
   void build_tree(std::vector<Entry>& entries);
   // The searches' layout: the tree with every other level left out. An inner node's quad holds the
