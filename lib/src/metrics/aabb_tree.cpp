@@ -43,23 +43,6 @@ double box_squared_distance(const Eigen::AlignedBox3d& box, const Eigen::Vector3
   return (p - p.cwiseMax(box.min()).cwiseMin(box.max())).squaredNorm();
 }
 
-// The nodes a depth-first search has yet to visit, each with its box's squared distance from the
-// point (found once, when its parent was opened) and a flag of the search's own.
-struct NodeStack {
-  int node[128];
-  double distance[128];
-  bool flag[128];
-  int top = 0;
-  void push(int i, double d, bool f = false) { node[top] = i, distance[top] = d, flag[top] = f, ++top; }
-  // Both children of inner node `parent`, the nearer on top (visited first).
-  template <typename Node>
-  void push_children(const std::vector<Node>& nodes, const Node& parent, const Eigen::Vector3d& p, bool f = false) {
-    const int a = parent.first, b = parent.first + 1;
-    const double da = box_squared_distance(nodes[a].box, p), db = box_squared_distance(nodes[b].box, p);
-    if (da < db) push(b, db, f), push(a, da, f);
-    else push(a, da, f), push(b, db, f);
-  }
-};
 
 // Nodes of a subtree over n faces and over n + 1 with median splits, which depends on n alone. (Halves
 // differ by one at most, so two counts per level carry the recursion.)
@@ -316,17 +299,27 @@ int AabbTree::build_quad(int node) {
 }
 
 namespace {
-// What the closest-point search passes over: nothing (the other searches pass over nodes by their cones).
-struct NoSkip {
-  bool operator()(int) const { return false; }
+// How descend() enters nodes: enter(node, flag) returns kPass to pass over the node, or the flag its
+// subtree carries (kPlain or kFlagged; a search may flag a subtree, the flag passing to all below).
+constexpr int kPass = -1, kPlain = 0, kFlagged = 1;
+// The closest-point search enters every node.
+struct EnterAll {
+  int operator()(int, bool) const { return kPlain; }
 };
+// The cone searches pass over the nodes skip(node) rules out.
+template <typename Skip>
+auto entering_unless(Skip skip) {
+  return [skip](int i, bool) { return skip(i) ? kPass : kPlain; };
+}
 
-// The nodes a search through the quads has yet to visit, as in NodeStack, each with its Quad::next.
+// The nodes a search through the quads has yet to visit, each with its box's squared distance from the
+// point (found when its parent was opened), its Quad::next and its flag.
 struct QuadStack {
   int node[128], next[128];
   double distance[128];
+  bool flag[128];
   int top = 0;
-  void push(int i, int n, double d) { node[top] = i, next[top] = n, distance[top] = d, ++top; }
+  void push(int i, int n, double d, bool f) { node[top] = i, next[top] = n, distance[top] = d, flag[top] = f, ++top; }
 };
 
 // A quad's four squared box distances from p, as lower bounds of the exact ones, in floats: p rounds to
@@ -386,32 +379,40 @@ struct QuadDistances {
 };
 }  // namespace
 
-template <typename Skip, typename Visit>
-void AabbTree::descend(const Eigen::Vector3d& p, const double& bound, Skip skip, Visit visit) const {
+template <typename Enter, typename Visit>
+void AabbTree::descend(const Eigen::Vector3d& p, const double& bound, Enter enter, Visit visit) const {
   if (order_.empty()) return;
   const QuadDistances distances(p, extent_);
   QuadStack stack;
   const Node& root = nodes_[0];
-  stack.push(0, quads_.empty() ? -1 - (root.first * 4 + root.count - 1) : 0, box_squared_distance(root.box, p));
+  stack.push(0, quads_.empty() ? -1 - (root.first * 4 + root.count - 1) : 0, box_squared_distance(root.box, p), false);
   while (stack.top > 0) {
     --stack.top;
     if (stack.distance[stack.top] > bound) continue;
     const int i = stack.node[stack.top];
-    if (skip(i)) continue;
+    const int entered = enter(i, stack.flag[stack.top]);
+    if (entered == kPass) continue;
+    const bool flag = entered == kFlagged;
     if (const int next = stack.next[stack.top]; next < 0) {
       const int first = (-1 - next) >> 2, count = ((-1 - next) & 3) + 1;
-      for (int slot = first; slot < first + count; ++slot) visit(slot);
+      for (int slot = first; slot < first + count; ++slot)
+        if (visit(slot, flag)) return;
       continue;
     }
     const Quad& quad = quads_[stack.next[stack.top]];
     double d[4];
     distances(quad.lo, quad.hi, d);
-    // The middle level's own test: lanes under a child that is passed over go too.
-    if constexpr (!std::is_same_v<Skip, NoSkip>) {
+    // The middle level is entered too: lanes under a child passed over go, and the others take its flag.
+    bool lane_flag[2] = {flag, flag};
+    if constexpr (!std::is_same_v<Enter, EnterAll>) {
       const Node& node = nodes_[i];
-      for (int side = 0; side < 2; ++side)
-        if (const int child = node.first + side; nodes_[child].count == 0 && skip(child))
-          d[2 * side] = d[2 * side + 1] = std::numeric_limits<double>::infinity();
+      for (int side = 0; side < 2; ++side) {
+        const int child = node.first + side;
+        if (nodes_[child].count > 0) continue;  // a leaf in its lane, entered when popped
+        const int middle = enter(child, flag);
+        if (middle == kPass) d[2 * side] = d[2 * side + 1] = std::numeric_limits<double>::infinity();
+        lane_flag[side] = middle == kFlagged;
+      }
     }
     // Nearer first on top: pushed farthest first.
     int lanes[4], n = 0;
@@ -421,7 +422,8 @@ void AabbTree::descend(const Eigen::Vector3d& p, const double& bound, Skip skip,
       for (; at > 0 && d[lanes[at - 1]] < d[lane]; --at) lanes[at] = lanes[at - 1];
       lanes[at] = lane;
     }
-    for (int k = 0; k < n; ++k) stack.push(quad.node[lanes[k]], quad.next[lanes[k]], d[lanes[k]]);
+    for (int k = 0; k < n; ++k)
+      stack.push(quad.node[lanes[k]], quad.next[lanes[k]], d[lanes[k]], lane_flag[lanes[k] / 2]);
   }
 }
 
@@ -436,17 +438,18 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
     test_corners(hint, mesh_.positions.row(mesh_.triangles(hint, 0)), mesh_.positions.row(mesh_.triangles(hint, 1)),
                  mesh_.positions.row(mesh_.triangles(hint, 2)));
   if (nodes_.empty() || order_.empty()) return best;
-  descend(p, best.squared_distance, NoSkip{}, [&](int slot) {
+  descend(p, best.squared_distance, EnterAll{}, [&](int slot, bool) {
     const Index f = order_[slot];
     if (corners_.empty()) {
       test_corners(f, mesh_.positions.row(mesh_.triangles(f, 0)), mesh_.positions.row(mesh_.triangles(f, 1)),
                    mesh_.positions.row(mesh_.triangles(f, 2)));
-      return;
+      return false;
     }
     // The face's own box first: most faces of a leaf lie farther than the best found so far.
     const auto& t = corners_[slot];
     const Eigen::Vector3d lo = t[0].cwiseMin(t[1]).cwiseMin(t[2]), hi = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
     if ((p - p.cwiseMax(lo).cwiseMin(hi)).squaredNorm() <= best.squared_distance) test_corners(f, t[0], t[1], t[2]);
+    return false;
   });
   return best;
 }
@@ -549,35 +552,26 @@ bool AabbTree::nearest_faces_against(const Eigen::Vector3d& p, const Eigen::Vect
     if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best.squared_distance = d, best.face = f;
   };
   if (hint >= 0) test_face(hint);
-  descend(p, best.squared_distance, [&](int i) { return sides_[i].all_same(unit); },
-          [&](int slot) { test_face(order_[slot]); });
+  const auto same_side = [&](int i) { return sides_[i].all_same(unit); };
+  descend(p, best.squared_distance, entering_unless(same_side), [&](int slot, bool) {
+    test_face(order_[slot]);
+    return false;
+  });
   if (best.face < 0) return false;
   hint = best.face;
   if (!(normals_[best.face].dot(normal) < 0)) return false;
-  // The flag: inside a node the first search passed over.
-  NodeStack stack;
-  stack.push(0, box_squared_distance(nodes_[0].box, p));
-  while (stack.top > 0) {
-    --stack.top;
-    if (stack.distance[stack.top] > best.squared_distance) continue;
-    const int i = stack.node[stack.top];
-    const bool inside = stack.flag[stack.top] || sides_[i].all_same(unit);
-    const Node& node = nodes_[i];
-    if (node.count > 0) {
-      if (!inside) continue;  // searched already
-      for (int s = node.first; s < node.first + node.count; ++s) {
-        const Index f = order_[s];
+  // The flag: inside a node the first search passed over (leaves outside were searched already).
+  bool before_b = false;
+  descend(
+      p, best.squared_distance, [&](int i, bool inside) { return inside || same_side(i) ? kFlagged : kPlain; },
+      [&](int slot, bool inside) {
+        if (!inside) return false;
+        const Index f = order_[slot];
         const double d = distance(f);
-        if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) {
-          hint = f;
-          return false;
-        }
-      }
-      continue;
-    }
-    stack.push_children(nodes_, node, p, inside);
-  }
-  return true;
+        if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) before_b = true, hint = f;
+        return before_b;
+      });
+  return !before_b;
 }
 
 AabbTree::Hit AabbTree::closest_facing(const Eigen::Vector3d& p, const Eigen::Vector3d& normal) const {
@@ -586,14 +580,16 @@ AabbTree::Hit AabbTree::closest_facing(const Eigen::Vector3d& p, const Eigen::Ve
   if (normals_.empty() || order_.empty() || !(length > 0)) return best;
   const Eigen::Vector3d against = -normal / length;
   // (Nodes whose faces all face the other way are passed over.)
-  descend(p, best.squared_distance, [&](int i) { return sides_[i].all_same(against); }, [&](int slot) {
+  const auto facing_away = [&](int i) { return sides_[i].all_same(against); };
+  descend(p, best.squared_distance, entering_unless(facing_away), [&](int slot, bool) {
     const Index f = order_[slot];
-    if (!(normals_[f].dot(normal) > 0)) return;
+    if (!(normals_[f].dot(normal) > 0)) return false;
     const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
                                                         mesh_.positions.row(mesh_.triangles(f, 1)),
                                                         mesh_.positions.row(mesh_.triangles(f, 2)));
     const double d = (q - p).squaredNorm();
     if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best = {q, d, f};
+    return false;
   });
   return best;
 }
@@ -642,13 +638,14 @@ double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vecto
     return cone.half_angle <= angle &&
            axis.dot(cone.axis) >= cos_angle * cone.cos_half + sin_angle * cone.sin_half + kCosineSlack;
   };
-  descend(p, best, none_turned, [&](int slot) {
+  descend(p, best, entering_unless(none_turned), [&](int slot, bool) {
     const Index f = order_[slot];
-    if (normals_[f] == Eigen::Vector3d::Zero() || axis.dot(normals_[f]) >= cos_angle + kCosineSlack) return;
+    if (normals_[f] == Eigen::Vector3d::Zero() || axis.dot(normals_[f]) >= cos_angle + kCosineSlack) return false;
     const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
                                                         mesh_.positions.row(mesh_.triangles(f, 1)),
                                                         mesh_.positions.row(mesh_.triangles(f, 2)));
     best = std::min(best, (q - p).squaredNorm());
+    return false;
   });
   return std::sqrt(best);
 }

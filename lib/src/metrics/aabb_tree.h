@@ -124,10 +124,10 @@ class AabbTree {
   /// Appends the quad of inner node `node`, and those below it; returns its index.
   int build_quad(int node);
   /// The depth-first search of the closest-point queries: visits the leaves nearer p than `bound` (which
-  /// visit(slot) may lower as it goes; slot: a place in order_), nearer first, passing over the nodes
-  /// skip(node) rules out.
-  template <typename Skip, typename Visit>
-  void descend(const Eigen::Vector3d& p, const double& bound, Skip skip, Visit visit) const;
+  /// visit may lower as it goes), nearer first. enter(node, flag) passes over a node or gives the flag
+  /// its subtree carries (see the .cpp); visit(slot, flag), slot a place in order_, returns true to stop.
+  template <typename Enter, typename Visit>
+  void descend(const Eigen::Vector3d& p, const double& bound, Enter enter, Visit visit) const;
   /// Distance from p to the nearest face whose normal is more than `angle` from unit `axis`, or
   /// `limit` if there is none nearer.
   double distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vector3d& axis, double angle, double limit) const;
