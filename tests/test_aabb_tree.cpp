@@ -128,6 +128,27 @@ TEST(AabbTree, ClosestMatchesBruteForceFarFromTheOriginAndOnTinyTrees) {
     const Eigen::Vector3d p(0.2, 0.2, z0 - gap);
     EXPECT_EQ(tree.closest(p, 4).face, 0) << "z0 " << z0;
   }
+  // Faces whose centroids crowd towards one end at every scale (at 2^-k, some coinciding): bins of equal
+  // width split off a few faces at a time, until the tree falls back on median splits (a bound on its
+  // depth, which the search's stack is sized for).
+  {
+    const int faces = 3000;
+    Mesh crowded;
+    crowded.positions.resize(3 * faces, 3);
+    crowded.triangles.resize(faces, 3);
+    for (int f = 0; f < faces; ++f) {
+      const double x = std::ldexp(1.0, -(f % 1000)) + 1e-3 * (f / 1000), size = 1e-6;
+      crowded.positions.row(3 * f) = Eigen::RowVector3d(x, 0, 0);
+      crowded.positions.row(3 * f + 1) = Eigen::RowVector3d(x + size, 0, 0);
+      crowded.positions.row(3 * f + 2) = Eigen::RowVector3d(x, size, 0.01 * f);
+      crowded.triangles.row(f) = Eigen::Matrix<Index, 1, 3>(3 * f, 3 * f + 1, 3 * f + 2);
+    }
+    const AabbTree tree(crowded);
+    for (const Probe& probe : probes_near(crowded, 200, 1e-3, 13)) {
+      const auto [face_expected, d_expected] = brute_closest(crowded, probe.point);
+      EXPECT_EQ(tree.closest(probe.point).face, face_expected);
+    }
+  }
   for (const int faces : {1, 3, 4, 5, 7, 9, 17}) {
     Mesh strip;
     strip.positions.resize(faces + 2, 3);

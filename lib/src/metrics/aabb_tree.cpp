@@ -97,14 +97,19 @@ int surface_area_bin(const std::vector<Entry>& entries, int begin, int end, int 
   return best_bin;
 }
 
+// Surface-area splits stop this deep: median splits below keep the tree within kMostDepth levels, which
+// the searches' stack is sized for (the median's subtrees of up to kMostFaces faces take 28 at most).
+constexpr int kSurfaceAreaDepth = 40;
+constexpr int kMostDepth = kSurfaceAreaDepth + 28;
+
 template <typename Entry>
-int split(std::vector<Entry>& entries, int begin, int end) {
+int split(std::vector<Entry>& entries, int begin, int end, int depth) {
   Eigen::AlignedBox3f centre_box;
   for (int i = begin; i < end; ++i) centre_box.extend(entries[i].centre);
   int axis;
   const float extent = centre_box.diagonal().maxCoeff(&axis);
   if constexpr (requires(Entry e) { e.lo; }) {
-    if (extent > 0) {
+    if (extent > 0 && depth < kSurfaceAreaDepth) {
       const float low = centre_box.min()[axis], scale = kBins / extent;
       if (const int bin = surface_area_bin(entries, begin, end, axis, low, scale); bin >= 0)
         return static_cast<int>(std::partition(entries.begin() + begin, entries.begin() + end, [&](const Entry& e) {
@@ -162,6 +167,7 @@ struct AabbTree::Part {
   int begin, end;
   std::unique_ptr<Part> child[2];  // a node of the top: its halves
   int pair = -1;                   // a node of the top: its children's index in nodes_
+  int depth = 0;                   // its root's level
   int root = -1, next = -1;        // a part: its root's index in nodes_, and where its other nodes start
   std::size_t size = 0;            // a part: its nodes
   std::vector<Node> nodes;         // a part built on its own: its nodes, root first
@@ -172,7 +178,7 @@ void AabbTree::build_tree(std::vector<Entry>& entries) {
   constexpr bool sized = !requires(Entry e) { e.lo; };
   const int n = static_cast<int>(entries.size());
   if (n == 0) return;
-  const std::unique_ptr<Part> top = split_top(0, n, entries);
+  const std::unique_ptr<Part> top = split_top(0, n, 0, entries);
   std::vector<Part*> parts;
   auto collect = [&](auto& self, Part& part) -> void {
     if (!part.child[0]) return parts.push_back(&part);
@@ -187,7 +193,7 @@ void AabbTree::build_tree(std::vector<Entry>& entries) {
     }
     part.nodes.resize(static_cast<std::size_t>(2 * (part.end - part.begin)));  // never more
     int next = 1;
-    build(part.nodes, 0, next, part.begin, part.end, entries);
+    build(part.nodes, 0, next, part.begin, part.end, part.depth, entries);
     part.nodes.resize(static_cast<std::size_t>(next));
     part.nodes.shrink_to_fit();
     part.size = part.nodes.size();
@@ -209,7 +215,7 @@ void AabbTree::build_tree(std::vector<Entry>& entries) {
     Part& part = *parts[i];
     if (sized) {
       int next = part.next;
-      build(nodes_, part.root, next, part.begin, part.end, entries);
+      build(nodes_, part.root, next, part.begin, part.end, part.depth, entries);
       return;
     }
     // Node j > 0 of the part's list lands at shift + j, its root at part.root.
@@ -233,18 +239,19 @@ void AabbTree::build_tree(std::vector<Entry>& entries) {
 }
 
 template <typename Entry>
-std::unique_ptr<AabbTree::Part> AabbTree::split_top(int begin, int end, std::vector<Entry>& entries) const {
+std::unique_ptr<AabbTree::Part> AabbTree::split_top(int begin, int end, int depth, std::vector<Entry>& entries) const {
   auto part = std::make_unique<Part>();
-  part->begin = begin, part->end = end;
+  part->begin = begin, part->end = end, part->depth = depth;
   if (end - begin <= kParallelFaces) return part;
-  const int mid = split(entries, begin, end);
-  tbb::parallel_invoke([&] { part->child[0] = split_top(begin, mid, entries); },
-                       [&] { part->child[1] = split_top(mid, end, entries); });
+  const int mid = split(entries, begin, end, depth);
+  tbb::parallel_invoke([&] { part->child[0] = split_top(begin, mid, depth + 1, entries); },
+                       [&] { part->child[1] = split_top(mid, end, depth + 1, entries); });
   return part;
 }
 
 template <typename Entry>
-void AabbTree::build(std::vector<Node>& nodes, int at, int& next, int begin, int end, std::vector<Entry>& entries) const {
+void AabbTree::build(std::vector<Node>& nodes, int at, int& next, int begin, int end, int depth,
+                     std::vector<Entry>& entries) const {
   if (end - begin <= kLeafSize) {
     Node& leaf = nodes[at];
     for (int i = begin; i < end; ++i)
@@ -253,12 +260,12 @@ void AabbTree::build(std::vector<Node>& nodes, int at, int& next, int begin, int
     leaf.count = end - begin;
     return;
   }
-  const int mid = split(entries, begin, end);
+  const int mid = split(entries, begin, end, depth);
   // The children are a pair, each subtree's other nodes after both: children come after their parent.
   const int left = next;
   next += 2;
-  build(nodes, left, next, begin, mid, entries);
-  build(nodes, left + 1, next, mid, end, entries);
+  build(nodes, left, next, begin, mid, depth + 1, entries);
+  build(nodes, left + 1, next, mid, end, depth + 1, entries);
   nodes[at].first = left;
   nodes[at].count = 0;
   nodes[at].box = nodes[left].box.merged(nodes[left + 1].box);
@@ -314,10 +321,13 @@ auto entering_unless(Skip skip) {
 
 // The nodes a search through the quads has yet to visit, each with its box's squared distance from the
 // point (found when its parent was opened), its Quad::next and its flag.
+// (A search pushes at most three more than it pops at each quad, one for every two levels.)
 struct QuadStack {
-  int node[128], next[128];
-  double distance[128];
-  bool flag[128];
+  static constexpr int kSize = 128;
+  static_assert(3 * (kMostDepth / 2 + 1) + 1 <= kSize);
+  int node[kSize], next[kSize];
+  double distance[kSize];
+  bool flag[kSize];
   int top = 0;
   void push(int i, int n, double d, bool f) { node[top] = i, next[top] = n, distance[top] = d, flag[top] = f, ++top; }
 };

@@ -117,10 +117,11 @@ class AabbTree {
   /// to parts of at most kParallelFaces faces (see the .cpp).
   struct Part;
   template <typename Entry>
-  std::unique_ptr<Part> split_top(int begin, int end, std::vector<Entry>& entries) const;
-  /// Fills in node `at` of `nodes` over those slots, its descendants from `next` on (advanced past them).
+  std::unique_ptr<Part> split_top(int begin, int end, int depth, std::vector<Entry>& entries) const;
+  /// Fills in node `at` (at level `depth`) of `nodes` over those slots, its descendants from `next` on
+  /// (advanced past them).
   template <typename Entry>
-  void build(std::vector<Node>& nodes, int at, int& next, int begin, int end, std::vector<Entry>& entries) const;
+  void build(std::vector<Node>& nodes, int at, int& next, int begin, int end, int depth, std::vector<Entry>& entries) const;
   /// Appends the quad of inner node `node`, and those below it; returns its index.
   int build_quad(int node);
   /// The depth-first search of the closest-point queries: visits the leaves nearer p than `bound` (which
