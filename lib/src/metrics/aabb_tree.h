@@ -12,6 +12,15 @@ namespace lodkit::detail {
 
 class AabbTree {
  public:
+  // The layout's limits. A leaf's face count and first slot are packed into a quad (Quad::next).
+  static constexpr Index kMostFaces = Index{1} << 29;
+  static constexpr int kLeafSize = 4;  // faces a leaf holds at most
+  static_assert(kLeafSize <= 4, "Quad::next holds a leaf's face count in two bits");
+  // Surface-area splits stop this deep, median splits below: no tree is deeper than kMostDepth (a
+  // median subtree of up to kMostFaces faces takes 28 levels), which the searches' stack is sized for.
+  static constexpr int kSurfaceAreaDepth = 40;
+  static constexpr int kMostDepth = kSurfaceAreaDepth + 28;
+
   struct Options {
     /// Keep a copy of every face's corners in the tree's order (72 bytes a face), which makes closest()
     /// about 15 % faster; facing_against() does not use it.
@@ -112,7 +121,6 @@ class AabbTree {
     std::int32_t node[4];      // per lane: its node in nodes_, or -1
     std::int32_t next[4];      // per lane: its own quad, or for a leaf -1 - (first slot * 4 + count - 1)
   };
-  static constexpr Index kMostFaces = Index{1} << 29;  // leaves' slots as Quad::next encodes them
   /// The tree over slots [begin, end) of `entries` (order_ to be): the top's splits side by side, down
   /// to parts of at most kParallelFaces faces (see the .cpp).
   struct Part;
