@@ -40,15 +40,18 @@ double box_area(const Eigen::AlignedBox3f& box) {
   return d.x() * d.y() + d.y() * d.z() + d.z() * d.x();
 }
 
-// The bin of kBins along `axis` (from `low`, `scale` bins a unit) below which the surface area heuristic
-// splits, or -1 where no boundary splits the faces.
+// A centroid's bin of kBins along `axis`, from `low` at `scale` bins a unit.
+int bin_of(const Eigen::Vector3f& centre, int axis, float low, float scale) {
+  return std::clamp(static_cast<int>((centre[axis] - low) * scale), 0, kBins - 1);
+}
+
+// The bin below which the surface area heuristic splits, or -1 where no bin boundary splits the faces.
 template <typename Entry>
 int surface_area_bin(const std::vector<Entry>& entries, int begin, int end, int axis, float low, float scale) {
-  auto bin_of = [&](const Entry& e) { return std::clamp(static_cast<int>((e.centre[axis] - low) * scale), 0, kBins - 1); };
   std::array<Eigen::AlignedBox3f, kBins> boxes;
   std::array<int, kBins> counts{};
   for (int i = begin; i < end; ++i) {
-    const int k = bin_of(entries[i]);
+    const int k = bin_of(entries[i].centre, axis, low, scale);
     boxes[k].extend(entries[i].lo), boxes[k].extend(entries[i].hi);
     ++counts[k];
   }
@@ -80,9 +83,9 @@ int split(std::vector<Entry>& entries, int begin, int end, int depth) {
     if (extent > 0 && depth < AabbTree::kSurfaceAreaDepth) {
       const float low = centre_box.min()[axis], scale = kBins / extent;
       if (const int bin = surface_area_bin(entries, begin, end, axis, low, scale); bin >= 0)
-        return static_cast<int>(std::partition(entries.begin() + begin, entries.begin() + end, [&](const Entry& e) {
-                                  return std::clamp(static_cast<int>((e.centre[axis] - low) * scale), 0, kBins - 1) < bin;
-                                }) - entries.begin());
+        return static_cast<int>(std::partition(entries.begin() + begin, entries.begin() + end,
+                                               [&](const Entry& e) { return bin_of(e.centre, axis, low, scale) < bin; }) -
+                                entries.begin());
     }
   }
   const int mid = (begin + end) / 2;
