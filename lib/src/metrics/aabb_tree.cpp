@@ -36,10 +36,12 @@ double box_squared_distance(const Eigen::AlignedBox3d& box, const Eigen::Vector3
   return (p - p.cwiseMax(box.min()).cwiseMin(box.max())).squaredNorm();
 }
 
+// Whether face f at squared distance d comes before `best` in the searches' order: by distance, then
+// by index.
+bool comes_before(double d, Index f, const AabbTree::Hit& best) {
+  return d < best.squared_distance || (d == best.squared_distance && f < best.face);
+}
 
-}  // namespace
-
-namespace {
 // How descend() enters nodes: enter(node, flag) returns kPass to pass over the node, or the flag its
 // subtree carries (kPlain or kFlagged; a search may flag a subtree, the flag passing to all below).
 constexpr int kPass = -1, kPlain = 0, kFlagged = 1;
@@ -129,7 +131,7 @@ void AabbTree::descend(const Eigen::Vector3d& p, const double& bound, Enter ente
   const QuadDistances distances(p, extent_);
   QuadStack stack;
   const Node& root = nodes_[0];
-  stack.push(0, quads_.empty() ? -1 - (root.first * 4 + root.count - 1) : 0, box_squared_distance(root.box, p), false);
+  stack.push(0, quads_.empty() ? leaf_code(root) : 0, box_squared_distance(root.box, p), false);
   while (stack.top > 0) {
     --stack.top;
     if (stack.distance[stack.top] > bound) continue;
@@ -138,7 +140,7 @@ void AabbTree::descend(const Eigen::Vector3d& p, const double& bound, Enter ente
     if (entered == kPass) continue;
     const bool flag = entered == kFlagged;
     if (const int next = stack.next[stack.top]; next < 0) {
-      const int first = (-1 - next) >> 2, count = ((-1 - next) & 3) + 1;
+      const int first = (-1 - next) >> 2, count = ((-1 - next) & 3) + 1;  // leaf_code() undone
       for (int slot = first; slot < first + count; ++slot)
         if (visit(slot, flag)) return;
       continue;
@@ -171,28 +173,29 @@ void AabbTree::descend(const Eigen::Vector3d& p, const double& bound, Enter ente
   }
 }
 
+Eigen::Vector3d AabbTree::closest_on_face(const Eigen::Vector3d& p, Index f) const {
+  return closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)), mesh_.positions.row(mesh_.triangles(f, 1)),
+                                   mesh_.positions.row(mesh_.triangles(f, 2)));
+}
+
 AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
   Hit best{p, std::numeric_limits<double>::infinity(), -1};
-  auto test_corners = [&](Index f, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-    const Eigen::Vector3d q = closest_point_on_triangle(p, a, b, c);
-    const double d = (q - p).squaredNorm();
-    if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best = {q, d, f};
+  auto consider = [&](Index f, const Eigen::Vector3d& q) {
+    if (const double d = (q - p).squaredNorm(); comes_before(d, f, best)) best = {q, d, f};
   };
-  if (hint >= 0)
-    test_corners(hint, mesh_.positions.row(mesh_.triangles(hint, 0)), mesh_.positions.row(mesh_.triangles(hint, 1)),
-                 mesh_.positions.row(mesh_.triangles(hint, 2)));
+  if (hint >= 0) consider(hint, closest_on_face(p, hint));
   if (nodes_.empty() || order_.empty()) return best;
   descend(p, best.squared_distance, EnterAll{}, [&](int slot, bool) {
     const Index f = order_[slot];
     if (corners_.empty()) {
-      test_corners(f, mesh_.positions.row(mesh_.triangles(f, 0)), mesh_.positions.row(mesh_.triangles(f, 1)),
-                   mesh_.positions.row(mesh_.triangles(f, 2)));
+      consider(f, closest_on_face(p, f));
       return false;
     }
     // The face's own box first: most faces of a leaf lie farther than the best found so far.
     const auto& t = corners_[slot];
     const Eigen::Vector3d lo = t[0].cwiseMin(t[1]).cwiseMin(t[2]), hi = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
-    if ((p - p.cwiseMax(lo).cwiseMin(hi)).squaredNorm() <= best.squared_distance) test_corners(f, t[0], t[1], t[2]);
+    if ((p - p.cwiseMax(lo).cwiseMin(hi)).squaredNorm() <= best.squared_distance)
+      consider(f, closest_point_on_triangle(p, t[0], t[1], t[2]));
     return false;
   });
   return best;
@@ -287,13 +290,9 @@ void AabbTree::prepare_facing() {
 bool AabbTree::nearest_faces_against(const Eigen::Vector3d& p, const Eigen::Vector3d& normal,
                                      const Eigen::Vector3d& unit, Index& hint) const {
   Hit best{p, std::numeric_limits<double>::infinity(), -1};
-  auto distance = [&](Index f) {
-    return (closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)), mesh_.positions.row(mesh_.triangles(f, 1)),
-                                      mesh_.positions.row(mesh_.triangles(f, 2))) - p).squaredNorm();
-  };
+  auto distance = [&](Index f) { return (closest_on_face(p, f) - p).squaredNorm(); };
   auto test_face = [&](Index f) {
-    const double d = distance(f);
-    if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best.squared_distance = d, best.face = f;
+    if (const double d = distance(f); comes_before(d, f, best)) best.squared_distance = d, best.face = f;
   };
   if (hint >= 0) test_face(hint);
   const auto same_side = [&](int i) { return sides_[i].all_same(unit); };
@@ -311,8 +310,7 @@ bool AabbTree::nearest_faces_against(const Eigen::Vector3d& p, const Eigen::Vect
       [&](int slot, bool inside) {
         if (!inside) return false;
         const Index f = order_[slot];
-        const double d = distance(f);
-        if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) before_b = true, hint = f;
+        if (comes_before(distance(f), f, best)) before_b = true, hint = f;
         return before_b;
       });
   return !before_b;
@@ -328,11 +326,8 @@ AabbTree::Hit AabbTree::closest_facing(const Eigen::Vector3d& p, const Eigen::Ve
   descend(p, best.squared_distance, entering_unless(facing_away), [&](int slot, bool) {
     const Index f = order_[slot];
     if (!(normals_[f].dot(normal) > 0)) return false;
-    const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
-                                                        mesh_.positions.row(mesh_.triangles(f, 1)),
-                                                        mesh_.positions.row(mesh_.triangles(f, 2)));
-    const double d = (q - p).squaredNorm();
-    if (d < best.squared_distance || (d == best.squared_distance && f < best.face)) best = {q, d, f};
+    const Eigen::Vector3d q = closest_on_face(p, f);
+    if (const double d = (q - p).squaredNorm(); comes_before(d, f, best)) best = {q, d, f};
     return false;
   });
   return best;
@@ -385,10 +380,7 @@ double AabbTree::distance_to_turned(const Eigen::Vector3d& p, const Eigen::Vecto
   descend(p, best, entering_unless(none_turned), [&](int slot, bool) {
     const Index f = order_[slot];
     if (normals_[f] == Eigen::Vector3d::Zero() || axis.dot(normals_[f]) >= cos_angle + kCosineSlack) return false;
-    const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(f, 0)),
-                                                        mesh_.positions.row(mesh_.triangles(f, 1)),
-                                                        mesh_.positions.row(mesh_.triangles(f, 2)));
-    best = std::min(best, (q - p).squaredNorm());
+    best = std::min(best, (closest_on_face(p, f) - p).squaredNorm());
     return false;
   });
   return std::sqrt(best);
@@ -407,10 +399,7 @@ bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& n
     // The hint face's own distance is a bound on the nearest face's: where p lies nearer the surface
     // than the anchor, it reaches further (a large face's centroid far from its leaf's anchor).
     if (c.turns_little(normal)) {
-      const Eigen::Vector3d q = closest_point_on_triangle(p, mesh_.positions.row(mesh_.triangles(hint, 0)),
-                                                          mesh_.positions.row(mesh_.triangles(hint, 1)),
-                                                          mesh_.positions.row(mesh_.triangles(hint, 2)));
-      if (c.settles_within(p, normal, (q - p).norm())) return false;
+      if (c.settles_within(p, normal, (closest_on_face(p, hint) - p).norm())) return false;
     }
   }
   // Without a hint, the nearest face itself: nearest_faces_against() may return a face far from p

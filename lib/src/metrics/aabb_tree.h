@@ -130,6 +130,10 @@ class AabbTree {
   /// (advanced past them).
   template <typename Entry>
   void build(std::vector<Node>& nodes, int at, int& next, int begin, int end, int depth, std::vector<Entry>& entries) const;
+  /// A leaf as Quad::next (and the search's stack) holds it: its first slot and face count, below 0.
+  static int leaf_code(const Node& leaf) { return -1 - (leaf.first * 4 + leaf.count - 1); }
+  /// The closest point to p on face f.
+  Eigen::Vector3d closest_on_face(const Eigen::Vector3d& p, Index f) const;
   /// Appends the quad of inner node `node`, and those below it; returns its index.
   int build_quad(int node);
   /// The depth-first search of the closest-point queries: visits the leaves nearer p than `bound` (which

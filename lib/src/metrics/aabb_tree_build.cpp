@@ -260,7 +260,7 @@ int AabbTree::build_quad(int node) {
       quad.lo[axis][lane] = lo, quad.hi[axis][lane] = hi;
     }
     quad.node[lane] = i;
-    if (nodes_[i].count > 0) quad.next[lane] = -1 - (nodes_[i].first * 4 + nodes_[i].count - 1);
+    if (nodes_[i].count > 0) quad.next[lane] = leaf_code(nodes_[i]);
   };
   for (int side = 0; side < 2; ++side) {
     const int child = nodes_[node].first + side;
