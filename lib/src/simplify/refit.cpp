@@ -140,6 +140,7 @@ class Refitter {
 
   Vec corner(Index f, int k) const { return points_[corners_[f][k]]; }
   Vec normal(Index f) const { return (corner(f, 1) - corner(f, 0)).cross(corner(f, 2) - corner(f, 0)); }
+  Vec centroid(Index f) const { return (corner(f, 0) + corner(f, 1) + corner(f, 2)) / 3; }
 
   // Every sample's distance and pull at the current positions; returns the largest distance.
   // With `only_moved`, only the samples on (output) or nearest (input) a face with a point moved since the
@@ -341,9 +342,9 @@ class Refitter {
     for (int round = 0; round < kTurnRounds && !inverted.empty(); ++round) {
       tbb::parallel_for(std::size_t{0}, inverted.size(), [&](std::size_t i) {
         const Index f = inverted[i];
-        const Vec centroid = (corner(f, 0) + corner(f, 1) + corner(f, 2)) / 3;
-        const auto hit = input_tree_.closest_facing(centroid, normal(f));
-        move[i] = hit.face >= 0 ? Vec(hit.point - centroid) : Vec::Zero();
+        const Vec at = centroid(f);
+        const auto hit = input_tree_.closest_facing(at, normal(f));
+        move[i] = hit.face >= 0 ? Vec(hit.point - at) : Vec::Zero();
       });
       std::fill(step.begin(), step.end(), Vec::Zero());
       std::fill(count.begin(), count.end(), 0);
@@ -371,9 +372,8 @@ class Refitter {
   std::vector<Index> inverted_faces() {
     std::vector<char> against(corners_.size());
     tbb::parallel_for(std::size_t{0}, corners_.size(), [&](std::size_t f) {
-      const auto& c = corners_[f];
-      against[f] = input_tree_.facing_against((points_[c[0]] + points_[c[1]] + points_[c[2]]) / 3,
-                                              normal(static_cast<Index>(f)), face_hint_[f]);
+      const Index face = static_cast<Index>(f);
+      against[f] = input_tree_.facing_against(centroid(face), normal(face), face_hint_[f]);
     });
     std::vector<Index> faces;
     for (std::size_t f = 0; f < against.size(); ++f)
@@ -444,7 +444,7 @@ class Refitter {
                   quality < detail::triangle_quality(kept[c[0]], kept[c[1]], kept[c[2]], before.norm()));
         if (bad[f] || !o_.avoid_inverted) return;
         Index& hint = face_hint_[f];
-        if (input_tree_.facing_against((points_[c[0]] + points_[c[1]] + points_[c[2]]) / 3, now, hint)) {
+        if (input_tree_.facing_against(centroid(static_cast<Index>(f)), now, hint)) {
           Index kept_hint = hint;
           bad[f] = !input_tree_.facing_against((kept[c[0]] + kept[c[1]] + kept[c[2]]) / 3, before, kept_hint);
         }
