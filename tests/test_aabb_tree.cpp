@@ -128,9 +128,9 @@ TEST(AabbTree, ClosestMatchesBruteForceFarFromTheOriginAndOnTinyTrees) {
     const Eigen::Vector3d p(0.2, 0.2, z0 - gap);
     EXPECT_EQ(tree.closest(p, 4).face, 0) << "z0 " << z0;
   }
-  // Faces whose centroids crowd towards one end at every scale (at 2^-k, some coinciding): bins of equal
-  // width split off a few faces at a time, until the tree falls back on median splits (a bound on its
-  // depth, which the search's stack is sized for).
+  // Faces whose centroids crowd towards one end at every scale (at 2^-k, many coinciding in floats):
+  // equal bins split them unevenly, and where all of a node's centroids coincide the split falls back on
+  // the median.
   {
     const int faces = 3000;
     Mesh crowded;
