@@ -16,6 +16,9 @@ namespace lodkit::detail {
 namespace {
 constexpr int kParallelFaces = 1 << 14;  // subtrees larger than this are built side by side
 constexpr int kLeafSize = AabbTree::kLeafSize;
+// Whether entries carry their face's box (surface-area splits) or the centroid alone (median splits).
+template <typename Entry>
+constexpr bool kBoxed = requires(Entry e) { e.lo; };
 
 // Nodes of a subtree over n faces and over n + 1 with median splits, which depends on n alone. (Halves
 // differ by one at most, so two counts per level carry the recursion.)
@@ -79,7 +82,7 @@ int split(std::vector<Entry>& entries, int begin, int end, int depth) {
   for (int i = begin; i < end; ++i) centre_box.extend(entries[i].centre);
   int axis;
   const float extent = centre_box.diagonal().maxCoeff(&axis);
-  if constexpr (requires(Entry e) { e.lo; }) {
+  if constexpr (kBoxed<Entry>) {
     if (extent > 0 && depth < AabbTree::kSurfaceAreaDepth) {
       const float low = centre_box.min()[axis], scale = kBins / extent;
       if (const int bin = surface_area_bin(entries, begin, end, axis, low, scale); bin >= 0)
@@ -146,7 +149,7 @@ struct AabbTree::Part {
 
 template <typename Entry>
 void AabbTree::build_tree(std::vector<Entry>& entries) {
-  constexpr bool sized = !requires(Entry e) { e.lo; };
+  constexpr bool sized = !kBoxed<Entry>;  // median parts' node counts are known in advance
   const int n = static_cast<int>(entries.size());
   if (n == 0) return;
   const std::unique_ptr<Part> top = split_top(0, n, 0, entries);
