@@ -66,6 +66,33 @@ TEST(Refit, TheRmsStageLowersTheRmsAndKeepsTheLargestDistances) {
   }
 }
 
+TEST(Refit, SamplesThatKeepTheirFaceLeaveTheLargestDistanceExactAndTheErrorsAsTheyWere) {
+  for (const Mesh& fine : {test::bumpy_sphere(5, 0.03), make_torus({.major_segments = 128, .minor_segments = 48})}) {
+    const SimplifyResult coarse = unrefit(fine, 0.05);
+    // The largest sampled distance a refit reports is that of its samples at its result, exactly, even
+    // where every sample that can keeps its face (their distances are upper bounds). A refit of one pass
+    // measures every sample with a search and moves nothing.
+    Mesh keeping = coarse.mesh;
+    const RefitReport most = refit_to_input(fine, keeping, {.rms_passes = 0, .keep_face_below = 1}, coarse.face_origin);
+    ASSERT_GT(most.steps, 1);
+    Mesh again = keeping;
+    const RefitReport measured = refit_to_input(fine, again, {.passes = 1, .rms_passes = 0}, coarse.face_origin);
+    EXPECT_EQ(again.positions, keeping.positions);
+    EXPECT_EQ(measured.sampled_max_before, most.sampled_max_after);
+
+    // The default against every sample searched every pass: the same errors, within 5 %.
+    Mesh searched = coarse.mesh, kept = coarse.mesh;
+    refit_to_input(fine, searched, {.keep_face_below = 0}, coarse.face_origin);
+    refit_to_input(fine, kept, {}, coarse.face_origin);
+    EXPECT_NE(searched.positions, kept.positions);
+    const Comparison a = compare(fine, searched), b = compare(fine, kept);
+    EXPECT_LT(b.hausdorff_bound, 1.05 * a.hausdorff);
+    EXPECT_LT(b.rms, 1.05 * a.rms);
+    EXPECT_EQ(count_flipped_faces(fine, kept), 0);
+    EXPECT_TRUE(inspect(kept).manifold);
+  }
+}
+
 TEST(Refit, SimplifyRunsItByDefaultForQuadricAndReportsIt) {
   const Mesh fine = test::bumpy_sphere(5, 0.03);
   SimplifyOptions o;
@@ -235,6 +262,8 @@ TEST(Refit, BadOptionsAreErrors) {
   EXPECT_THROW(simplify(fine, o), Error);
   EXPECT_THROW(refit_to_input(fine, coarse, {.rms_passes = -1}), Error);
   EXPECT_THROW(refit_to_input(fine, coarse, {.rms_guard = 1.5}), Error);
+  EXPECT_THROW(refit_to_input(fine, coarse, {.keep_face_below = -0.1}), Error);
+  EXPECT_THROW(refit_to_input(fine, coarse, {.keep_face_below = 1.5}), Error);
   o.refit_passes.reset();
   o.refit_rms_passes = -1;
   EXPECT_THROW(simplify(fine, o), Error);

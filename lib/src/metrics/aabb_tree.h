@@ -40,6 +40,11 @@ class AabbTree {
   };
   /// Closest point on the mesh to `p`. `hint` (a face likely to be close) speeds up the search.
   Hit closest(const Eigen::Vector3d& p, Index hint = -1) const;
+  /// Closest point to `p` on face `face` alone (no search): an upper bound of closest()'s distance.
+  Hit closest_on(const Eigen::Vector3d& p, Index face) const {
+    const Eigen::Vector3d q = closest_on_face(p, face);
+    return {q, (q - p).squaredNorm(), face};
+  }
 
   /// Readies facing_against(): each face's unit normal and each node's cone of normals.
   void prepare_facing();

@@ -61,6 +61,14 @@ Vec barycentric(const Vec& a, const Vec& b, const Vec& c, const Vec& p) {
   return bary / bary.sum();
 }
 
+// Whether q, p's nearest point on a triangle of normal n, is p's projection onto its plane (lies inside
+// the triangle, not on its rim): where it does, p's nearest face moves to a neighbour only if p moves
+// past the rim.
+bool projects_inside(const Vec& p, const Vec& q, const Vec& n) {
+  const Vec d = p - q;
+  return d.cross(n).squaredNorm() <= 1e-6 * d.squaredNorm() * n.squaredNorm();
+}
+
 std::uint64_t edge_key(Index a, Index b) {
   return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
 }
@@ -72,12 +80,13 @@ struct Pull {
   Vec direction = Vec::Zero();  // unit: the face moving along it comes nearer the other surface here
   double distance = 0;
   Index hint = -1;  // output samples: the input face nearest when last measured
+  bool kept_face = false;  // measured against the face of the measure before, without a search
 };
 
 class Refitter {
  public:
   Refitter(const detail::RefitInput& input, Mesh& output, std::span<const Index> face_origin, const RefitOptions& options)
-      : output_(output), o_(options), input_tree_(input.tree), input_samples_(input.samples) {
+      : output_(output), o_(options), input_mesh_(input.mesh), input_tree_(input.tree), input_samples_(input.samples) {
     weld_output();
     // Each face's reference orientation: its input face's where known, else its own before the refit.
     const Mesh& in = input.mesh;
@@ -141,12 +150,21 @@ class Refitter {
   Vec corner(Index f, int k) const { return points_[corners_[f][k]]; }
   Vec normal(Index f) const { return (corner(f, 1) - corner(f, 0)).cross(corner(f, 2) - corner(f, 0)); }
   Vec centroid(Index f) const { return (corner(f, 0) + corner(f, 1) + corner(f, 2)) / 3; }
+  Vec input_normal(Index g) const {
+    const auto corner = [&](int k) { return Vec(input_mesh_.positions.row(input_mesh_.triangles(g, k))); };
+    return (corner(1) - corner(0)).cross(corner(2) - corner(0));
+  }
 
   // Every sample's distance and pull at the current positions; returns the largest distance.
   // With `only_moved`, only the samples on (output) or nearest (input) a face with a point moved since the
   // last measure are measured again: the others' distances cannot have grown, since the face they were
   // measured to is where it was, so the pulls stay upper bounds (the RMS stage's guard needs no more).
-  double sample(bool only_moved = false) {
+  // With `keep_face_below` > 0, a sample nearer than that to the face it was last measured against,
+  // whose nearest point on that face lies inside it, keeps the face without a search (see
+  // RefitOptions::keep_face_below): it mostly still is the nearest, since the steps are small, and its
+  // distance is an upper bound either way. The largest distance stays exact: kept samples farther than
+  // the largest searched one are searched.
+  double sample(bool only_moved = false, double keep_face_below = 0) {
     std::vector<char> moved;
     if (only_moved) {
       moved.resize(points_.size());
@@ -161,40 +179,64 @@ class Refitter {
     refresh_output();
     const detail::AabbTree output_tree(output_);
     const std::size_t per_face = grid_.size();
-    auto measure_input = [&](std::size_t s) {
+    const double keep2 = keep_face_below * keep_face_below;
+    auto measure_input = [&](std::size_t s, double below2) {
       const Vec& p = input_samples_[s];
       Pull& pull = input_pulls_[s];
-      const auto hit = output_tree.closest(p, pull.face);
+      detail::AabbTree::Hit hit{p, std::numeric_limits<double>::infinity(), -1};
+      if (pull.face >= 0) hit = output_tree.closest_on(p, pull.face);
+      pull.kept_face = pull.face >= 0 && hit.squared_distance < below2 && projects_inside(p, hit.point, normal(pull.face));
+      if (!pull.kept_face) hit = output_tree.closest(p, pull.face);
       pull.face = hit.face;
       pull.distance = std::sqrt(hit.squared_distance);
       pull.bary = barycentric(corner(hit.face, 0), corner(hit.face, 1), corner(hit.face, 2), hit.point);
       pull.direction = pull.distance > 0 ? Vec((p - hit.point) / pull.distance) : Vec::Zero();
     };
-    auto measure_output = [&](std::size_t s) {
+    auto measure_output = [&](std::size_t s, double below2) {
       const Index f = static_cast<Index>(s / per_face);
       const Vec& b = grid_[s % per_face];
       const Vec q = b[0] * corner(f, 0) + b[1] * corner(f, 1) + b[2] * corner(f, 2);
       Pull& pull = output_pulls_[s];
-      const auto hit = input_tree_.closest(q, pull.hint);
+      detail::AabbTree::Hit hit{q, std::numeric_limits<double>::infinity(), -1};
+      if (pull.hint >= 0) hit = input_tree_.closest_on(q, pull.hint);
+      pull.kept_face = pull.hint >= 0 && hit.squared_distance < below2 && projects_inside(q, hit.point, input_normal(pull.hint));
+      if (!pull.kept_face) hit = input_tree_.closest(q, pull.hint);
       pull.hint = hit.face;
       pull.face = f;
       pull.bary = b;
       pull.distance = std::sqrt(hit.squared_distance);
       pull.direction = pull.distance > 0 ? Vec((hit.point - q) / pull.distance) : Vec::Zero();
     };
-    auto largest_of = [&](std::vector<Pull>& pulls, const auto& measure) {
+    // The largest distance among the searched samples, and among those that kept their face.
+    struct Largest {
+      double searched = 0, kept = 0;
+    };
+    auto largest_of = [&](std::vector<Pull>& pulls, const auto& measure, auto&& which, double below2) {
       return tbb::parallel_reduce(
-          tbb::blocked_range<std::size_t>(0, pulls.size()), 0.0,
-          [&](const tbb::blocked_range<std::size_t>& range, double largest) {
+          tbb::blocked_range<std::size_t>(0, pulls.size()), Largest{},
+          [&](const tbb::blocked_range<std::size_t>& range, Largest largest) {
             for (std::size_t s = range.begin(); s != range.end(); ++s) {
-              if (needs(pulls[s].face)) measure(s);
-              largest = std::max(largest, pulls[s].distance);
+              if (which(s)) measure(s, below2);
+              double& into = pulls[s].kept_face ? largest.kept : largest.searched;
+              into = std::max(into, pulls[s].distance);
             }
             return largest;
           },
-          [](double a, double b) { return std::max(a, b); });
+          [](Largest a, Largest b) { return Largest{std::max(a.searched, b.searched), std::max(a.kept, b.kept)}; });
     };
-    return std::max(largest_of(input_pulls_, measure_input), largest_of(output_pulls_, measure_output));
+    auto both = [&](auto&& which_input, auto&& which_output, double below2) {
+      const Largest a = largest_of(input_pulls_, measure_input, which_input, below2);
+      const Largest b = largest_of(output_pulls_, measure_output, which_output, below2);
+      return Largest{std::max(a.searched, b.searched), std::max(a.kept, b.kept)};
+    };
+    Largest largest = both([&](std::size_t s) { return needs(input_pulls_[s].face); },
+                           [&](std::size_t s) { return needs(output_pulls_[s].face); }, keep2);
+    while (largest.kept > largest.searched) {  // (once at most: those searched get no nearer than `above`)
+      const double above = largest.searched;
+      largest = both([&](std::size_t s) { return input_pulls_[s].kept_face && input_pulls_[s].distance > above; },
+                     [&](std::size_t s) { return output_pulls_[s].kept_face && output_pulls_[s].distance > above; }, 0);
+    }
+    return largest.searched;
   }
 
   static constexpr double kGrow = 1.25;
@@ -210,9 +252,9 @@ class Refitter {
   };
   static constexpr int kGuardRounds = 4;  // send-backs per step before the RMS stage gives the step up
 
-  double measure(RefitReport& report) {
+  double measure(RefitReport& report, double keep_face_below = 0) {
     ++report.passes;
-    return sample();
+    return sample(/*only_moved=*/false, keep_face_below);
   }
   double sum_of_squares() const {
     double sum = 0;
@@ -232,7 +274,7 @@ class Refitter {
     StepFraction scale{o_.step, o_.step};
     bool best_measured = false;
     for (int pass = 0; pass < o_.passes; ++pass) {
-      const double sampled_max = measure(report);
+      const double sampled_max = measure(report, pass == 0 ? 0.0 : o_.keep_face_below * best_max);
       const double rms = sampled_rms(sum_of_squares());
       if (pass == 0) report.sampled_max_before = sampled_max, report.sampled_rms_before = rms;
       best_measured = sampled_max < best_max;
@@ -258,12 +300,12 @@ class Refitter {
     if (o_.rms_passes == 0) return;
     std::vector<Vec> best = points_, step(points_.size(), Vec::Zero());
     Guard guard;  // each sample's at the best positions
-    double best_sum = std::numeric_limits<double>::infinity(), limit = 0;
+    double best_sum = std::numeric_limits<double>::infinity(), first_largest = 0, limit = 0;
     StepFraction scale{o_.step, o_.step};
     for (int pass = 0; pass < o_.rms_passes; ++pass) {
-      double largest = pass == 0 && measured ? *measured : measure(report);
+      double largest = pass == 0 && measured ? *measured : measure(report, o_.keep_face_below * first_largest);
       if (pass == 0) {
-        limit = o_.rms_guard * largest;
+        first_largest = largest, limit = o_.rms_guard * largest;
         if (o_.passes == 0) report.sampled_max_before = largest, report.sampled_rms_before = sampled_rms(sum_of_squares());
       }
       const bool within = pass == 0 || keep_within(best, guard, largest);
@@ -462,6 +504,7 @@ class Refitter {
 
   Mesh& output_;
   const RefitOptions& o_;
+  const Mesh& input_mesh_;
   const detail::AabbTree& input_tree_;
   std::vector<Vec> points_;                    // the output's positions, one per welded point
   std::vector<Index> point_of_;                // per output vertex
@@ -486,6 +529,8 @@ bool needs_refit(const Mesh& input, const Mesh& simplified, const RefitOptions& 
   if (options.rms_passes < 0) throw Error(fmt::format("refit: RMS passes must not be negative, got {}", options.rms_passes));
   if (!(options.rms_guard >= 0 && options.rms_guard <= 1))
     throw Error(fmt::format("refit: the RMS guard must be in [0, 1], got {}", options.rms_guard));
+  if (!(options.keep_face_below >= 0 && options.keep_face_below <= 1))
+    throw Error(fmt::format("refit: keep_face_below must be in [0, 1], got {}", options.keep_face_below));
   if (!(options.exponent >= 0 && options.exponent <= 64))
     throw Error(fmt::format("refit: exponent must be between 0 and 64, got {}", options.exponent));
   if (!face_origin.empty() && face_origin.size() != static_cast<std::size_t>(simplified.num_faces()))
