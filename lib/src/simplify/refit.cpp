@@ -69,6 +69,20 @@ bool projects_inside(const Vec& p, const Vec& q, const Vec& n) {
   return d.cross(n).squaredNorm() <= 1e-6 * d.squaredNorm() * n.squaredNorm();
 }
 
+// p's nearest point on `tree`'s mesh; or, where p lies within sqrt(below2) of face `last` (-1: none)
+// and projects inside it, its nearest point on `last` (`kept` says which). normal_of(face): a normal.
+template <typename NormalOf>
+detail::AabbTree::Hit nearest(const detail::AabbTree& tree, const Vec& p, Index last, double below2, NormalOf normal_of,
+                              bool& kept) {
+  if (last >= 0) {
+    const auto on_last = tree.closest_on(p, last);
+    kept = on_last.squared_distance < below2 && projects_inside(p, on_last.point, normal_of(last));
+    if (kept) return on_last;
+  }
+  kept = false;
+  return tree.closest(p, last);
+}
+
 std::uint64_t edge_key(Index a, Index b) {
   return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
 }
@@ -183,10 +197,7 @@ class Refitter {
     auto measure_input = [&](std::size_t s, double below2) {
       const Vec& p = input_samples_[s];
       Pull& pull = input_pulls_[s];
-      detail::AabbTree::Hit hit{p, std::numeric_limits<double>::infinity(), -1};
-      if (pull.face >= 0) hit = output_tree.closest_on(p, pull.face);
-      pull.kept_face = pull.face >= 0 && hit.squared_distance < below2 && projects_inside(p, hit.point, normal(pull.face));
-      if (!pull.kept_face) hit = output_tree.closest(p, pull.face);
+      const auto hit = nearest(output_tree, p, pull.face, below2, [&](Index f) { return normal(f); }, pull.kept_face);
       pull.face = hit.face;
       pull.distance = std::sqrt(hit.squared_distance);
       pull.bary = barycentric(corner(hit.face, 0), corner(hit.face, 1), corner(hit.face, 2), hit.point);
@@ -197,10 +208,7 @@ class Refitter {
       const Vec& b = grid_[s % per_face];
       const Vec q = b[0] * corner(f, 0) + b[1] * corner(f, 1) + b[2] * corner(f, 2);
       Pull& pull = output_pulls_[s];
-      detail::AabbTree::Hit hit{q, std::numeric_limits<double>::infinity(), -1};
-      if (pull.hint >= 0) hit = input_tree_.closest_on(q, pull.hint);
-      pull.kept_face = pull.hint >= 0 && hit.squared_distance < below2 && projects_inside(q, hit.point, input_normal(pull.hint));
-      if (!pull.kept_face) hit = input_tree_.closest(q, pull.hint);
+      const auto hit = nearest(input_tree_, q, pull.hint, below2, [&](Index g) { return input_normal(g); }, pull.kept_face);
       pull.hint = hit.face;
       pull.face = f;
       pull.bary = b;
