@@ -63,10 +63,11 @@ Vec barycentric(const Vec& a, const Vec& b, const Vec& c, const Vec& p) {
 
 // Whether q, p's nearest point on a triangle of normal n, is p's projection onto its plane (lies inside
 // the triangle, not on its rim): where it does, p's nearest face moves to a neighbour only if p moves
-// past the rim.
+// past the rim. A face without area (n zero) has no inside.
 bool projects_inside(const Vec& p, const Vec& q, const Vec& n) {
   const Vec d = p - q;
-  return d.cross(n).squaredNorm() <= 1e-6 * d.squaredNorm() * n.squaredNorm();
+  const double n2 = n.squaredNorm();
+  return n2 > 0 && d.cross(n).squaredNorm() <= 1e-6 * d.squaredNorm() * n2;
 }
 
 // p's nearest point on `tree`'s mesh; or, where p lies within sqrt(below2) of face `last` (-1: none)
