@@ -7,7 +7,8 @@
 // iteratively reweighted least squares over points sampled on both surfaces.
 //
 // Each pass measures every sample: the input's points and edge midpoints against the output, and a
-// barycentric grid on each output face against the input. A sample at distance d that lies at
+// barycentric grid on each output face against the input. (After a stage's first pass, most samples
+// are measured against the face they were nearest before, without a search: see sample().) A sample at distance d that lies at
 // barycentric b on an output face (or whose nearest output point does) comes nearer by b_k (u . delta)
 // when that face's corner k moves by delta, to first order, u the unit direction from the sample
 // towards the other surface. Each vertex solves a 3x3 weighted least-squares problem for the delta that
@@ -219,6 +220,7 @@ class Refitter {
     // The largest distance among the searched samples, and among those that kept their face.
     struct Largest {
       double searched = 0, kept = 0;
+      static Largest of(Largest a, Largest b) { return {std::max(a.searched, b.searched), std::max(a.kept, b.kept)}; }
     };
     auto largest_of = [&](std::vector<Pull>& pulls, const auto& measure, auto&& which, double below2) {
       return tbb::parallel_reduce(
@@ -231,16 +233,17 @@ class Refitter {
             }
             return largest;
           },
-          [](Largest a, Largest b) { return Largest{std::max(a.searched, b.searched), std::max(a.kept, b.kept)}; });
+          Largest::of);
     };
     auto both = [&](auto&& which_input, auto&& which_output, double below2) {
-      const Largest a = largest_of(input_pulls_, measure_input, which_input, below2);
-      const Largest b = largest_of(output_pulls_, measure_output, which_output, below2);
-      return Largest{std::max(a.searched, b.searched), std::max(a.kept, b.kept)};
+      return Largest::of(largest_of(input_pulls_, measure_input, which_input, below2),
+                         largest_of(output_pulls_, measure_output, which_output, below2));
     };
     Largest largest = both([&](std::size_t s) { return needs(input_pulls_[s].face); },
                            [&](std::size_t s) { return needs(output_pulls_[s].face); }, keep2);
-    while (largest.kept > largest.searched) {  // (once at most: those searched get no nearer than `above`)
+    // Kept samples farther than every searched one are searched. Once is enough: the searched largest
+    // stays at least `above`, and the samples still kept lie within it.
+    while (largest.kept > largest.searched) {
       const double above = largest.searched;
       largest = both([&](std::size_t s) { return input_pulls_[s].kept_face && input_pulls_[s].distance > above; },
                      [&](std::size_t s) { return output_pulls_[s].kept_face && output_pulls_[s].distance > above; }, 0);
