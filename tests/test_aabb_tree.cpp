@@ -1,6 +1,7 @@
 // The closest-point tree against brute force: closest() and facing_against() must give the answers a
 // scan over every face gives, whatever the hint, where facing_against() skips its search or not.
 #include <gtest/gtest.h>
+#include <lodkit/error.h>
 #include <lodkit/primitives.h>
 
 #include <random>
@@ -77,6 +78,39 @@ TEST(AabbTree, ClosestMatchesBruteForceWhateverTheHint) {
       }
     }
   }
+}
+
+// refit(): the mesh's positions move in place, far enough that faces change places between leaves, and
+// the refit tree answers as brute force does on the moved mesh (and as a tree built anew on it).
+TEST(AabbTree, RefitAnswersAsBruteForceAfterThePositionsMove) {
+  for (const AabbTree::Options& options : {AabbTree::Options{}, AabbTree::Options{.copy_corners = false},
+                                           AabbTree::Options{.surface_area_splits = false}}) {
+    Mesh torus = make_torus({});
+    AabbTree tree(torus, options);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> jitter(0.0, 0.08);
+    for (int round = 0; round < 3; ++round) {
+      for (Index v = 0; v < torus.num_vertices(); ++v) {
+        const double x = torus.positions(v, 0), y = torus.positions(v, 1);
+        torus.positions(v, 0) = 1.3 * x + jitter(rng), torus.positions(v, 1) = y + 0.4 * x + jitter(rng);
+        torus.positions(v, 2) += 0.5 * x * x + jitter(rng);
+      }
+      tree.refit();
+      const AabbTree fresh(torus, options);
+      for (const Probe& probe : probes_near(torus, 300, 0.5, 31 + round)) {
+        const auto [face_expected, d_expected] = brute_closest(torus, probe.point);
+        const AabbTree::Hit hit = tree.closest(probe.point, probe.source);
+        EXPECT_EQ(hit.face, face_expected);
+        EXPECT_EQ(hit.squared_distance, d_expected);
+        EXPECT_EQ(fresh.closest(probe.point).face, hit.face);
+      }
+    }
+  }
+  // A tree readied for the facing checks keeps per-face normals and cones it would not refit.
+  const Mesh box = make_box({});
+  AabbTree prepared(box);
+  prepared.prepare_facing();
+  EXPECT_THROW(prepared.refit(), Error);
 }
 
 // The search reads its boxes as floats, with a margin for rounding that grows with the coordinates:

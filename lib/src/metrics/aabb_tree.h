@@ -46,6 +46,12 @@ class AabbTree {
     return {q, (q - p).squaredNorm(), face};
   }
 
+  /// The boxes (and copied corners) again, after the mesh's positions moved in place, its faces the
+  /// same: the tree keeps its shape, so searches slow down as the positions drift, but every answer is
+  /// as exact as a new tree's (and the same: see closest()). Much cheaper than building again. Not for
+  /// a tree readied by prepare_facing().
+  void refit();
+
   /// Readies facing_against(): each face's unit normal and each node's cone of normals.
   void prepare_facing();
   /// Whether `normal` faces against (negative dot with) the normal of the face closest(p) finds; a
@@ -141,6 +147,10 @@ class AabbTree {
   Eigen::Vector3d closest_on_face(const Eigen::Vector3d& p, Index f) const;
   /// Appends the quad of inner node `node`, and those below it; returns its index.
   int build_quad(int node);
+  /// Lane `lane` of `quad` as node `node`'s box, in floats rounded outwards.
+  void set_lane_box(Quad& quad, int lane, int node) const;
+  /// refit()'s boxes of node `node` and those below it.
+  void refit_node(int node);
   /// The depth-first search of the closest-point queries: visits the leaves nearer p than `bound` (which
   /// visit may lower as it goes), nearer first. enter(node, flag) passes over a node or gives the flag
   /// its subtree carries (see the .cpp); visit(slot, flag), slot a place in order_, returns true to stop.

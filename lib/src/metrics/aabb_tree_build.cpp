@@ -255,13 +255,7 @@ int AabbTree::build_quad(int node) {
   std::fill_n(quad.node, 4, -1);
   std::fill_n(quad.next, 4, -1);
   auto set_lane = [&](int lane, int i) {
-    const Eigen::AlignedBox3d& box = nodes_[i].box;
-    for (int axis = 0; axis < 3; ++axis) {
-      float lo = static_cast<float>(box.min()[axis]), hi = static_cast<float>(box.max()[axis]);
-      if (lo > box.min()[axis]) lo = std::nextafter(lo, -std::numeric_limits<float>::infinity());
-      if (hi < box.max()[axis]) hi = std::nextafter(hi, std::numeric_limits<float>::infinity());
-      quad.lo[axis][lane] = lo, quad.hi[axis][lane] = hi;
-    }
+    set_lane_box(quad, lane, i);
     quad.node[lane] = i;
     if (nodes_[i].count > 0) quad.next[lane] = leaf_code(nodes_[i]);
   };
@@ -277,6 +271,43 @@ int AabbTree::build_quad(int node) {
     if (quad.node[lane] >= 0 && nodes_[quad.node[lane]].count == 0) quad.next[lane] = build_quad(quad.node[lane]);
   quads_[index] = quad;
   return index;
+}
+
+void AabbTree::set_lane_box(Quad& quad, int lane, int node) const {
+  const Eigen::AlignedBox3d& box = nodes_[node].box;
+  for (int axis = 0; axis < 3; ++axis) {
+    float lo = static_cast<float>(box.min()[axis]), hi = static_cast<float>(box.max()[axis]);
+    if (lo > box.min()[axis]) lo = std::nextafter(lo, -std::numeric_limits<float>::infinity());
+    if (hi < box.max()[axis]) hi = std::nextafter(hi, std::numeric_limits<float>::infinity());
+    quad.lo[axis][lane] = lo, quad.hi[axis][lane] = hi;
+  }
+}
+
+void AabbTree::refit() {
+  if (!normals_.empty()) throw Error("AabbTree::refit(): the tree is readied for facing checks, which it would not refit");
+  if (nodes_.empty() || order_.empty()) return;
+  refit_node(0);
+  extent_ = std::max(nodes_[0].box.min().cwiseAbs().maxCoeff(), nodes_[0].box.max().cwiseAbs().maxCoeff());
+  for (Quad& quad : quads_)
+    for (int lane = 0; lane < 4; ++lane)
+      if (quad.node[lane] >= 0) set_lane_box(quad, lane, quad.node[lane]);
+  if (!corners_.empty())
+    tbb::parallel_for(std::size_t{0}, corners_.size(), [&](std::size_t i) {
+      for (int k = 0; k < 3; ++k) corners_[i][k] = mesh_.positions.row(mesh_.triangles(order_[i], k)).transpose();
+    });
+}
+
+void AabbTree::refit_node(int node) {
+  Node& n = nodes_[node];
+  if (n.count > 0) {
+    n.box.setEmpty();
+    for (int i = n.first; i < n.first + n.count; ++i)
+      for (int k = 0; k < 3; ++k) n.box.extend(mesh_.positions.row(mesh_.triangles(order_[i], k)).transpose());
+    return;
+  }
+  refit_node(n.first);
+  refit_node(n.first + 1);
+  n.box = nodes_[n.first].box.merged(nodes_[n.first + 1].box);
 }
 
 }  // namespace lodkit::detail

@@ -193,7 +193,10 @@ class Refitter {
     };
     measured_at_ = points_;
     refresh_output();
-    const detail::AabbTree output_tree(output_);
+    // Built once; then its boxes follow the moves (the same answers as a new tree, in less time).
+    if (output_tree_) output_tree_->refit();
+    else output_tree_.emplace(output_);
+    const detail::AabbTree& output_tree = *output_tree_;
     const std::size_t per_face = grid_.size();
     const double keep2 = keep_face_below * keep_face_below;
     auto measure_input = [&](std::size_t s, double below2) {
@@ -528,6 +531,7 @@ class Refitter {
   std::vector<Pull> input_pulls_, output_pulls_;
   std::vector<Index> face_hint_;  // per output face: an input face near its centroid (facing_against's hint)
   std::vector<Vec> measured_at_;  // the positions the pulls were last measured at
+  std::optional<detail::AabbTree> output_tree_;  // over output_, whose positions move in place
 };
 
 }  // namespace
