@@ -8,12 +8,12 @@
 //
 // Each pass measures every sample: the input's points and edge midpoints against the output, and a
 // barycentric grid on each output face against the input. (After a stage's first pass, most samples
-// are measured against the face they were nearest before, without a search: see sample().) A sample at distance d that lies at
-// barycentric b on an output face (or whose nearest output point does) comes nearer by b_k (u . delta)
-// when that face's corner k moves by delta, to first order, u the unit direction from the sample
-// towards the other surface. Each vertex solves a 3x3 weighted least-squares problem for the delta that
-// takes its samples' distances to zero, weights (d / d_max)^exponent, clamps it to the distance of its
-// farthest sample, and all vertices step a fraction of it at once. A pass that finds the largest
+// are measured against the face they were nearest before, without a search: see sample().) A sample
+// at distance d that lies at barycentric b on an output face (or whose nearest output point does)
+// comes nearer by b_k (u . delta) when that face's corner k moves by delta, to first order, u the unit
+// direction from the sample towards the other surface. Each vertex solves a 3x3 weighted least-squares
+// problem for the delta that takes its samples' distances to zero, weights (d / d_max)^exponent, clamps
+// it to the distance of its farthest sample, and all vertices step a fraction of it at once. A pass that finds the largest
 // distance lower keeps the step and grows the fraction; one that does not goes back to the best
 // positions and halves it. Faces may not turn more than a limit per step or from their reference
 // orientation (their input face's, else their own before the refit), lose quality below the
@@ -105,21 +105,16 @@ class Refitter {
       : output_(output), o_(options), input_mesh_(input.mesh), input_tree_(input.tree), input_samples_(input.samples) {
     weld_output();
     // Each face's reference orientation: its input face's where known, else its own before the refit.
-    const Mesh& in = input.mesh;
     reference_.resize(corners_.size());
     for (std::size_t f = 0; f < corners_.size(); ++f) {
-      const bool known = f < face_origin.size() && face_origin[f] >= 0 && face_origin[f] < in.num_faces();
-      const Index g = known ? face_origin[f] : -1;
-      reference_[f] = known ? Vec((in.positions.row(in.triangles(g, 1)) - in.positions.row(in.triangles(g, 0)))
-                                      .cross(in.positions.row(in.triangles(g, 2)) - in.positions.row(in.triangles(g, 0)))
-                                      .transpose())
-                            : normal(static_cast<Index>(f));
+      const bool known = f < face_origin.size() && face_origin[f] >= 0 && face_origin[f] < input_mesh_.num_faces();
+      reference_[f] = known ? input_normal(face_origin[f]) : normal(static_cast<Index>(f));
     }
     find_fixed_points();
     // Output samples: a barycentric grid of n steps a side, n so that the output has about half as many
     // samples as the input has faces (a coarse face stands for many input faces), within [2, 12]. Twice
     // as many changed the errors by under 1 % on the shared meshes (docs/benchmarks-log.md, "Session 35").
-    const double ratio = static_cast<double>(in.num_faces()) / std::max<Index>(1, output.num_faces());
+    const double ratio = static_cast<double>(input_mesh_.num_faces()) / std::max<Index>(1, output.num_faces());
     const int n = std::clamp(static_cast<int>(std::ceil(std::sqrt(ratio))), 2, 12);
     for (int i = 0; i <= n; ++i)
       for (int j = 0; i + j <= n; ++j) grid_.push_back(Vec(i, j, n - i - j) / n);
