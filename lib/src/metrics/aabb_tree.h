@@ -151,6 +151,10 @@ class AabbTree {
   void set_lane_box(Quad& quad, int lane, int node) const;
   /// refit()'s boxes of node `node` and those below it.
   void refit_node(int node);
+  /// What follows the positions once the boxes are known: extent_, and the copied corners (if kept).
+  void read_positions();
+  /// `box` extended by face f's corners.
+  void extend_by_face(Eigen::AlignedBox3d& box, Index f) const;
   /// The depth-first search of the closest-point queries: visits the leaves nearer p than `bound` (which
   /// visit may lower as it goes), nearer first. enter(node, flag) passes over a node or gives the flag
   /// its subtree carries (see the .cpp); visit(slot, flag), slot a place in order_, returns true to stop.

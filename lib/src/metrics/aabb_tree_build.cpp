@@ -121,17 +121,24 @@ AabbTree::AabbTree(const Mesh& mesh, const Options& options) : mesh_(mesh) {
     tbb::parallel_for(Index{0}, n, [&](Index f) { centred[f] = {centroid(f).cast<float>(), f}; });
     build_tree(centred);
   }
-  if (n > 0) extent_ = std::max(nodes_[0].box.min().cwiseAbs().maxCoeff(), nodes_[0].box.max().cwiseAbs().maxCoeff());
   if (n > 0 && nodes_[0].count == 0) {
     quads_.reserve(nodes_.size() / 3 + 1);
     build_quad(0);
   }
-  if (options.copy_corners) {
-    corners_.resize(static_cast<std::size_t>(n));
-    tbb::parallel_for(Index{0}, n, [&](Index i) {
-      for (int k = 0; k < 3; ++k) corners_[i][k] = mesh.positions.row(mesh.triangles(order_[i], k)).transpose();
-    });
-  }
+  if (options.copy_corners) corners_.resize(static_cast<std::size_t>(n));
+  read_positions();
+}
+
+void AabbTree::read_positions() {
+  if (!nodes_.empty() && !order_.empty())
+    extent_ = std::max(nodes_[0].box.min().cwiseAbs().maxCoeff(), nodes_[0].box.max().cwiseAbs().maxCoeff());
+  tbb::parallel_for(std::size_t{0}, corners_.size(), [&](std::size_t i) {
+    for (int k = 0; k < 3; ++k) corners_[i][k] = mesh_.positions.row(mesh_.triangles(order_[i], k)).transpose();
+  });
+}
+
+void AabbTree::extend_by_face(Eigen::AlignedBox3d& box, Index f) const {
+  for (int k = 0; k < 3; ++k) box.extend(mesh_.positions.row(mesh_.triangles(f, k)).transpose());
 }
 
 // The tree's top (nodes over more than kParallelFaces faces), split side by side, and the parts below
@@ -228,8 +235,7 @@ void AabbTree::build(std::vector<Node>& nodes, int at, int& next, int begin, int
                      std::vector<Entry>& entries) const {
   if (end - begin <= kLeafSize) {
     Node& leaf = nodes[at];
-    for (int i = begin; i < end; ++i)
-      for (int k = 0; k < 3; ++k) leaf.box.extend(mesh_.positions.row(mesh_.triangles(entries[i].face, k)).transpose());
+    for (int i = begin; i < end; ++i) extend_by_face(leaf.box, entries[i].face);
     leaf.first = begin;
     leaf.count = end - begin;
     return;
@@ -287,22 +293,17 @@ void AabbTree::refit() {
   if (!normals_.empty()) throw Error("AabbTree::refit(): the tree is readied for facing checks, which it would not refit");
   if (nodes_.empty() || order_.empty()) return;
   refit_node(0);
-  extent_ = std::max(nodes_[0].box.min().cwiseAbs().maxCoeff(), nodes_[0].box.max().cwiseAbs().maxCoeff());
   for (Quad& quad : quads_)
     for (int lane = 0; lane < 4; ++lane)
       if (quad.node[lane] >= 0) set_lane_box(quad, lane, quad.node[lane]);
-  if (!corners_.empty())
-    tbb::parallel_for(std::size_t{0}, corners_.size(), [&](std::size_t i) {
-      for (int k = 0; k < 3; ++k) corners_[i][k] = mesh_.positions.row(mesh_.triangles(order_[i], k)).transpose();
-    });
+  read_positions();
 }
 
 void AabbTree::refit_node(int node) {
   Node& n = nodes_[node];
   if (n.count > 0) {
     n.box.setEmpty();
-    for (int i = n.first; i < n.first + n.count; ++i)
-      for (int k = 0; k < 3; ++k) n.box.extend(mesh_.positions.row(mesh_.triangles(order_[i], k)).transpose());
+    for (int i = n.first; i < n.first + n.count; ++i) extend_by_face(n.box, order_[i]);
     return;
   }
   refit_node(n.first);
