@@ -720,13 +720,15 @@ TEST(Simplify, HoppeHoldsOpenBoundariesToTheirCurves) {
 // trimesh_counter at 10 %, before random points were spread by area: Hausdorff 0.174 % without the rim
 // points, 0.059 % with them). Two random points per face, all of them on every face (none left to
 // spread by area, which on this cylinder puts enough near the rims by itself); the floor on the point
-// count is off, as on a mesh of 25k faces or more.
+// count is off, as on a mesh of 25k faces or more. No fit after the collapses: it mends part of a bevel
+// (seed 2: the rims without points 0.00315 -> 0.00272), which is not what this test measures.
 TEST(Simplify, HoppeSamplesSharpEdgesSoThatNoCollapseBevelsThem) {
   const Mesh cylinder = make_cylinder({.radius = 1.0, .height = 0.5, .segments = 256, .stacks = 4});
   for (const std::uint64_t seed : {1, 2, 3}) {
     SimplifyOptions o{.method = SimplifyMethod::Hoppe, .target_ratio = 0.25};
     o.hoppe_points_per_face = 2;
     o.hoppe_min_points = 0;
+    o.hoppe_fit_passes = 0;
     o.seed = seed;
     const SimplifyResult with = simplify(cylinder, o);
     o.hoppe_crease_angle_deg = 180;  // no points along sharp edges

@@ -37,6 +37,7 @@ struct SimplifyCliOptions {
   double hoppe_every_face = SimplifyOptions{}.hoppe_points_on_every_face;
   Index hoppe_min_points = SimplifyOptions{}.hoppe_min_points;
   double hoppe_crease_angle = SimplifyOptions{}.hoppe_crease_angle_deg;
+  int hoppe_fit_passes = SimplifyOptions{}.hoppe_fit_passes;
   Index lane_faces = -1;  // unset: by method
   Index max_valence = -1;  // unset: by method
   int refit_passes = -1;   // unset: by method
@@ -220,6 +221,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   s.hoppe_points_on_every_face = o.hoppe_every_face;
   s.hoppe_min_points = o.hoppe_min_points;
   s.hoppe_crease_angle_deg = o.hoppe_crease_angle;
+  s.hoppe_fit_passes = o.hoppe_fit_passes;
   if (o.lane_faces >= 0) s.lane_faces = o.lane_faces;
   if (o.max_valence >= 0) s.max_valence = o.max_valence;
   if (o.refit_passes >= 0) s.refit_passes = o.refit_passes;
@@ -267,6 +269,10 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       j["hausdorff_limit"]["view"] = {{"pixel_error", *o.pixel_error}, {"distance", o.distance}, {"fov", o.fov},
                                       {"viewport", o.viewport}};
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
+    if (r.hoppe_fit)
+      j["hoppe_fit"] = {{"passes", r.hoppe_fit->passes}, {"energy_before", r.hoppe_fit->energy_before},
+                        {"energy_after", r.hoppe_fit->energy_after}, {"points_sent_back", r.hoppe_fit->points_sent_back},
+                        {"seconds", r.hoppe_fit->seconds}};
     if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
     if (r.refit)
       j["refit"] = {{"passes", r.refit->passes}, {"steps", r.refit->steps}, {"rms_steps", r.refit->rms_steps},
@@ -307,6 +313,11 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     if (r.refit && r.refit->inverted_before > 0)
       fmt::print(stderr, "  refit: {} of {} faces facing against the input turned to face it, in {} rounds\n",
                  r.refit->inverted_before - r.refit->inverted_after, r.refit->inverted_before, r.refit->turn_steps);
+    if (r.hoppe_fit)
+      fmt::print(stderr, "  hoppe's fit: energy {:.6g} -> {:.6g} ({:+.1f}%) in {} pass{}, {} moves sent back ({:.3f} s)\n",
+                 r.hoppe_fit->energy_before, r.hoppe_fit->energy_after,
+                 r.hoppe_fit->energy_before > 0 ? 100.0 * (r.hoppe_fit->energy_after / r.hoppe_fit->energy_before - 1) : 0.0,
+                 r.hoppe_fit->passes, r.hoppe_fit->passes == 1 ? "" : "es", r.hoppe_fit->points_sent_back, r.hoppe_fit->seconds);
     if (r.dropped_degenerate_faces > 0)
       fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
                  thousands(r.dropped_degenerate_faces));
@@ -387,6 +398,10 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   "hoppe: input edges whose faces turn by more than this get points along them, so that a sharp "
                   "edge cannot be bevelled unseen (degrees; 180 = none)")
       ->check(in_range(0.0, 180.0))->capture_default_str();
+  sub->add_option("--hoppe-fit-passes", opt->hoppe_fit_passes,
+                  "hoppe: after the collapses, move every vertex at once to lower E_dist + E_spring (Mesh "
+                  "optimization's position step), in this many passes (0 = none)")
+      ->check(kNonNegative)->capture_default_str();
   sub->add_option("--lane-faces", opt->lane_faces,
                   "Meshes of twice this many faces are first simplified in slabs of about this many faces side by "
                   "side (0 = one queue throughout; default 125000 for quadric and edge-length, 8000 for hoppe)")
@@ -428,7 +443,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
     refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",
-                                 "--hoppe-crease-angle"}, "--method hoppe");
+                                 "--hoppe-crease-angle", "--hoppe-fit-passes"}, "--method hoppe");
     refuse_unless(m == "quadric", {"--crease-weight"}, "--method quadric");
   });
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
@@ -444,6 +459,7 @@ Examples:
   lodkit simplify spot.obj -o spot_small.obj --ratio 0.1 --attribute-weights 0,1,0
   lodkit simplify part.obj -o part_lo.obj --method schroeder --max-error 0.05% --feature-angle 30
   lodkit simplify fandisk.obj -o fandisk_lo.ply --ratio 0.1 --method hoppe
+  lodkit simplify bunny.ply -o bunny_h.ply --ratio 0.1 --method hoppe --hoppe-fit-passes 3   # refit E in 3 passes
   lodkit simplify counter.ply -o counter_lo.ply --ratio 0.01 --max-normal-change 90
   lodkit simplify suzanne_flat.ply -o suzanne_lo.ply --ratio 0.1 --recompute-normals
   lodkit simplify horse.ply -o horse_lo.ply --ratio 0.1 --inverted-faces refuse --measure

@@ -49,6 +49,19 @@ inline Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const
   return a + ab * v + ac * w;
 }
 
+/// Barycentric coordinates of p (on or near triangle a b c), clamped to the triangle; the centroid's
+/// for a degenerate triangle.
+inline Eigen::Vector3d barycentric(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                   const Eigen::Vector3d& p) {
+  const Eigen::Vector3d e0 = b - a, e1 = c - a, ep = p - a;
+  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), dp0 = ep.dot(e0), dp1 = ep.dot(e1);
+  const double det = d00 * d11 - d01 * d01;
+  if (!(det > 0)) return Eigen::Vector3d::Constant(1.0 / 3);
+  const double v = (d11 * dp0 - d01 * dp1) / det, w = (d00 * dp1 - d01 * dp0) / det;
+  const Eigen::Vector3d bary = Eigen::Vector3d(1 - v - w, v, w).cwiseMax(0.0);
+  return bary / bary.sum();
+}
+
 /// A triangle's plane and the three planes through its edges at right angles to it (outward unit
 /// normals). Together they bound the distance to the triangle from below, cheaply; callers that skip
 /// a triangle on the bound leave a margin of about 1e-9 of the coordinates for rounding.

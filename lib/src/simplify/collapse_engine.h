@@ -273,6 +273,10 @@ class Engine {
     cos_max_total_turn_ = std::cos(deg * std::numbers::pi / 180.0);
   }
   bool relax_total_turn();
+  /// The cost's fit after the collapses (CostModel::fit), held to the collapses' limits (engine_fit.cpp).
+  void fit_points(SimplifyResult& result);
+  Index send_back_breaking_moves(const std::vector<Index>& faces, const std::vector<Eigen::Vector3d>& before);
+  bool move_breaks_limits(Index f, const std::vector<Eigen::Vector3d>& before) const;
   Index max_valence_ = 0;  // faces at a vertex, at most (0 = no limit; see SimplifyOptions::max_valence)
   std::vector<EdgeUse> edges_;  // every edge of the input, from setup() until run() has queued them
   std::vector<Index> canonical_;  // per input vertex: the first vertex identical to it

@@ -13,6 +13,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "simplify/attribute_quadric.h"
@@ -104,6 +105,13 @@ class CostModel {
   /// True if a collapse changes the costs of edges around v's neighbours too (not just v's edges):
   /// those are then re-scored lazily, when they reach the top of the queue.
   virtual bool wide_update() const { return false; }
+  /// Once the collapses are done: moves the surviving points, connectivity fixed, to lower the cost's own
+  /// measure over the whole mesh; `pass` counts from 0 (hoppe: Mesh optimization's position step,
+  /// hoppe_fit.cpp), and returns the measure before the move; nothing for a cost that has no such step.
+  /// The engine then sends back the moves that break its limits and asks fit_measure().
+  virtual std::optional<double> fit(EngineState&, int /*pass*/) { return std::nullopt; }
+  /// The measure fit() lowers, at the current positions.
+  virtual double fit_measure(const EngineState&) { return 0; }
   /// True if one score costs enough (tens of microseconds) to share even a handful across threads.
   virtual bool costly() const { return false; }
 };

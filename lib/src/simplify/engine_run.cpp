@@ -343,6 +343,8 @@ SimplifyResult Engine::run(Index target) {
                                       *inverted_allowed_at_, kInvertedWait);
   }
 
+  fit_points(result);
+
   // Output: surviving faces in input order; surviving wedges in input order with their point's position.
   const Mesh& in = *s_.input;
   std::vector<Index> new_index(static_cast<std::size_t>(in.num_vertices()), -1);

@@ -14,44 +14,15 @@
 #include <algorithm>
 #include <bit>
 #include <iterator>
-#include <mutex>
 #include <random>
-#include <unordered_map>
 #include <tbb/enumerable_thread_specific.h>
 
 #include "core/bound_rows.h"
 #include "core/geometry.h"
-#include "simplify/engine.h"
+#include "simplify/hoppe_points.h"
 
 namespace lodkit::detail {
 namespace {
-
-/// A point sampled on the input's surface, kept with the current face it belongs to (inline, not by
-/// index: a candidate reads every point of a dozen faces, and scattered points cost a cache miss each).
-struct Sample {
-  Eigen::Vector3d x;
-  double dist2 = 0;  ///< squared distance to its face
-};
-
-/// The points sampled on the input's boundary, each belonging to one boundary edge of the current mesh.
-/// Lanes (slabs simplified side by side) look up and change the edges at their own points only, but
-/// in one map: its lookups and changes take the lock. (A list found stays where it is: the map's
-/// nodes never move, and no other lane touches it.)
-struct BoundaryCurves {
-  std::vector<Eigen::Vector3d> point;
-  std::vector<double> dist2;  ///< per point: squared distance to its edge
-  std::unordered_map<std::uint64_t, std::vector<Index>> edge_points;  ///< by edge_key()
-  mutable std::mutex lock;
-
-  static std::uint64_t edge_key(Index a, Index b) {
-    return std::uint64_t(std::uint32_t(std::min(a, b))) << 32 | std::uint32_t(std::max(a, b));
-  }
-  const std::vector<Index>* points_of(Index a, Index b) const {
-    const std::lock_guard hold(lock);
-    const auto it = edge_points.find(edge_key(a, b));
-    return it == edge_points.end() ? nullptr : &it->second;
-  }
-};
 
 /// The neighbours x of p with (p, x) a boundary edge: exactly one of p's faces has both.
 void boundary_neighbours(const EngineState& s, Index p, std::vector<Index>& out) {
@@ -91,7 +62,7 @@ class HoppeScorer {
   };
 
  public:
-  HoppeScorer(const std::vector<std::vector<Sample>>& face_samples, const BoundaryCurves& curves)
+  HoppeScorer(const FaceSamples& face_samples, const BoundaryCurves& curves)
       : face_samples_(face_samples), curves_(curves) {}
 
   bool score(const EngineState& s, Index u, Index v, Freedom freedom, bool border_edge, Candidate& out) {
@@ -355,16 +326,10 @@ class HoppeScorer {
     if (curve_ends_.empty()) curve_points_.clear();
   }
 
-  // Hoppe's schedule: springs matter while there are few points per face (they keep vertices from
-  // drifting where the data cannot hold them) and fade as points accumulate.
-  double spring_constant() const {
-    const double points_per_face = faces_ > 0 ? double(point_count_) / faces_ : 0.0;
-    if (points_per_face < 4) return 1e-2;
-    if (points_per_face < 8) return 1e-4;
-    return 1e-8;
-  }
+  // The paper's schedule, from this neighbourhood's points per face.
+  double spring_constant() const { return detail::spring_constant(faces_ > 0 ? double(point_count_) / faces_ : 0.0); }
 
-  const std::vector<std::vector<Sample>>& face_samples_;
+  const FaceSamples& face_samples_;
   const BoundaryCurves& curves_;
   // Scratch for one candidate.
   std::vector<Index> curve_points_, curve_ends_, scratch_;
@@ -566,12 +531,15 @@ class HoppeCost final : public CostModel {
     }
   }
 
+  std::optional<double> fit(EngineState& s, int pass) override { return fit_points(s, face_samples_, curves_, pass > 0); }
+  double fit_measure(const EngineState& s) override { return points_energy(s, face_samples_, curves_); }
+
  private:
   void add_point(const Eigen::Vector3d& p, Index face) {
     face_samples_[face].push_back({p, 0.0});
   }
 
-  std::vector<std::vector<Sample>> face_samples_;  ///< per face: the points that belong to it
+  FaceSamples face_samples_;
   // Scratch of collapsed(), per thread (lanes collapse side by side).
   struct ReassignScratch {
     std::vector<Sample> moving;

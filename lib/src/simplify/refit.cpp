@@ -51,17 +51,6 @@ namespace {
 
 using Vec = Eigen::Vector3d;
 
-// Barycentric coordinates of p (on or near triangle a b c), clamped to the triangle.
-Vec barycentric(const Vec& a, const Vec& b, const Vec& c, const Vec& p) {
-  const Vec e0 = b - a, e1 = c - a, ep = p - a;
-  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), dp0 = ep.dot(e0), dp1 = ep.dot(e1);
-  const double det = d00 * d11 - d01 * d01;
-  if (!(det > 0)) return Vec::Constant(1.0 / 3);
-  const double v = (d11 * dp0 - d01 * dp1) / det, w = (d00 * dp1 - d01 * dp0) / det;
-  const Vec bary = Vec(1 - v - w, v, w).cwiseMax(0.0);
-  return bary / bary.sum();
-}
-
 // Whether q, p's nearest point on a triangle of normal n, is p's projection onto its plane (lies inside
 // the triangle, not on its rim): where it does, p's nearest face moves to a neighbour only if p moves
 // past the rim. A face without area (n zero) has no inside.
@@ -200,7 +189,7 @@ class Refitter {
       const auto hit = nearest(output_tree, p, pull.face, below2, [&](Index f) { return normal(f); }, pull.kept_face);
       pull.face = hit.face;
       pull.distance = std::sqrt(hit.squared_distance);
-      pull.bary = barycentric(corner(hit.face, 0), corner(hit.face, 1), corner(hit.face, 2), hit.point);
+      pull.bary = detail::barycentric(corner(hit.face, 0), corner(hit.face, 1), corner(hit.face, 2), hit.point);
       pull.direction = pull.distance > 0 ? Vec((p - hit.point) / pull.distance) : Vec::Zero();
     };
     auto measure_output = [&](std::size_t s, double below2) {

@@ -46,6 +46,8 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   if (!(options.hoppe_crease_angle_deg >= 0 && options.hoppe_crease_angle_deg <= 180))
     throw Error(fmt::format("simplify: hoppe's crease angle must be between 0 and 180 degrees, got {}",
                             options.hoppe_crease_angle_deg));
+  if (options.hoppe_fit_passes < 0)
+    throw Error(fmt::format("simplify: hoppe's fit passes must not be negative, got {}", options.hoppe_fit_passes));
   // With no limit at all, half the faces.
   const Index target = !options.target_faces && !options.target_ratio && !options.max_error
                            ? mesh.num_faces() / 2
