@@ -79,18 +79,23 @@ TEST(ProgressiveMesh, EveryMethodBuildsAndRefinesExactly) {
 }
 
 TEST(ProgressiveMesh, LevelsEqualSimplifyToTheSameFaceCount) {
-  for (const Mesh& input : {test::bumpy_sphere(3, 0.05), seamed_sphere(), make_grid({})}) {
-    const ProgressiveMesh pm = build_progressive_mesh(input);
-    for (Index level : {Index(0), pm.max_level() / 7, pm.max_level() / 2, pm.max_level() - 1}) {
-      SimplifyOptions so;
-      so.refit_passes = 0;  // a level keeps the collapses' positions; simplify() would refit them
-      so.target_faces = pm.num_faces(level);
-      const SimplifyResult r = simplify(input, so);
-      const ExtractedLevel e = extract_level(pm, level);
-      expect_identical(e.mesh, r.mesh, "level " + std::to_string(level));
-      EXPECT_EQ(e.vertex_origin, r.vertex_origin);
+  for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe})
+    for (const Mesh& input : {test::bumpy_sphere(3, 0.05), seamed_sphere(), make_grid({})}) {
+      ProgressiveOptions o;
+      o.simplify.method = method;
+      const ProgressiveMesh pm = build_progressive_mesh(input, o);
+      for (Index level : {Index(0), pm.max_level() / 7, pm.max_level() / 2, pm.max_level() - 1}) {
+        SimplifyOptions so{.method = method};
+        // A level keeps the collapses' positions; simplify() would refit them (quadric) or fit them (hoppe).
+        so.refit_passes = 0;
+        so.hoppe_fit_passes = 0;
+        so.target_faces = pm.num_faces(level);
+        const SimplifyResult r = simplify(input, so);
+        const ExtractedLevel e = extract_level(pm, level);
+        expect_identical(e.mesh, r.mesh, to_string(method) + " level " + std::to_string(level));
+        EXPECT_EQ(e.vertex_origin, r.vertex_origin);
+      }
     }
-  }
 }
 
 TEST(ProgressiveMesh, LevelsEqualSimplifyWithAttributeAwareCosts) {
