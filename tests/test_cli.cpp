@@ -286,6 +286,34 @@ TEST(CliSimplify, TheRefitIsReportedAndCanBeTurnedOff) {
   EXPECT_EQ(run(dir, "simplify b.ply -o s.ply --refit-passes 3 --method schroeder").status, 2);
 }
 
+TEST(CliSimplify, HoppesFitIsReportedAndCanBeTurnedOff) {
+  // hoppe fits its vertices after the collapses by default: the JSON gives the energy before and after,
+  // the human output says it in one line, and with --hoppe-fit-passes 0 there is no fit and a higher RMS.
+  test::ScratchDir dir("cli-simplify-hoppe-fit");
+  write_mesh(test::bumpy_sphere(4, 0.04), (dir / "b.ply").string());
+  CliRun r = run(dir, "simplify b.ply -o s.ply --ratio 0.1 --method hoppe --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto with = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(with.contains("hoppe_fit")) << r.out;
+  EXPECT_EQ(with["hoppe_fit"]["passes"].get<int>(), 1);
+  EXPECT_LT(with["hoppe_fit"]["energy_after"].get<double>(), with["hoppe_fit"]["energy_before"].get<double>());
+  r = run(dir, "simplify b.ply -o s0.ply --ratio 0.1 --method hoppe --measure --json --hoppe-fit-passes 0");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto without = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(without.contains("hoppe_fit"));
+  EXPECT_LT(with["measured"]["rms"].get<double>(), without["measured"]["rms"].get<double>());
+  r = run(dir, "simplify b.ply -o s.ply --ratio 0.1 --method hoppe --hoppe-fit-passes 2");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("hoppe's fit: energy"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("in 2 passes"), std::string::npos) << r.err;
+  // Refused before anything is written: a negative count, or the option with another method.
+  EXPECT_EQ(run(dir, "simplify b.ply -o t.ply --method hoppe --hoppe-fit-passes -1").status, 2);
+  const CliRun other = run(dir, "simplify b.ply -o t.ply --hoppe-fit-passes 1");
+  EXPECT_EQ(other.status, 2);
+  EXPECT_NE(other.err.find("--hoppe-fit-passes: applies to --method hoppe"), std::string::npos) << other.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "t.ply"));
+}
+
 TEST(CliSimplify, ReasonIsPrintedWhenTheTargetIsOutOfReach) {
   test::ScratchDir dir("cli-simplify");
   ASSERT_EQ(run(dir, "generate box -o b.ply --divisions 4").status, 0);
