@@ -1,10 +1,12 @@
 #pragma once
 // Hoppe's points sampled on the input, shared by his energy (hoppe_cost.cpp) and the fit after the
 // collapses (hoppe_fit.cpp) (not public API).
+#include <algorithm>
 #include <cstdint>
 #include <mutex>
 #include <optional>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "simplify/engine.h"
