@@ -323,7 +323,7 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options = {});
 /// until one fails, then bisecting to 1/16 of the faces, and the output is the coarsest refit level
 /// that passed (result.refit says so). The distance need not grow at every collapse, so a coarser level might pass
 /// too, but the output's own bound is proved (result.within). Unrefit, the output equals simplify()
-/// with refit_passes = 0 to the same face count, except on meshes large enough for lanes (see
+/// with refit_passes = 0 (and hoppe_fit_passes = 0) to the same face count, except on meshes large enough for lanes (see
 /// lane_faces), whose progressive mesh runs one queue. Slower than simplify(): the bunny (69k faces)
 /// takes 4.0-5.9 s with the refit search (0.5-0.8 s without), igea_loop1 (1M, no refit) 6.2-7.6 s. `error` is
 /// not estimated here (0).
