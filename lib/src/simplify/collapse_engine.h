@@ -18,6 +18,7 @@
 #include <vector>
 #include <tbb/enumerable_thread_specific.h>
 
+#include "core/geometry.h"
 #include "core/topology.h"
 #include "metrics/aabb_tree.h"
 #include "simplify/engine.h"
@@ -134,6 +135,22 @@ class Engine {
   Index wedge_at(Index f, Index p) const;
   /// With `inverted_ok`, faces facing against the input are let be (a waited entry; see kInvertedWait).
   Rejection geometry(Lane& lane, Index u, Index v, const Eigen::Vector3d& p, bool inverted_ok = false);
+  /// The limits on face f moving from corners `was` to `now`, for a collapse (geometry()) and for the
+  /// fit after the collapses (engine_fit.cpp): not degenerate; turned no further than one step may,
+  /// nor than its limit from its input shape (small turns must not add up to a flip); not thinned
+  /// below the quality floor where it was better. `n1`: now's normal (not unit). Inline: geometry()
+  /// runs it on every face of every candidate.
+  Rejection face_move(Index f, const Eigen::Vector3d* was, const Eigen::Vector3d* now, Eigen::Vector3d& n1) const {
+    const Eigen::Vector3d n0 = (was[1] - was[0]).cross(was[2] - was[0]);
+    n1 = (now[1] - now[0]).cross(now[2] - now[0]);
+    const double l0 = n0.norm(), l1 = n1.norm();
+    if (!(l1 > 0)) return Rejection::Sliver;
+    if (l0 > 0 && n1.dot(n0) < cos_max_turn_ * l0 * l1) return Rejection::Flip;
+    if (n1.dot(s_.face_normal0[f].cast<double>()) < cos_max_total_turn_ * l1) return Rejection::Flip;
+    const double q1 = triangle_quality(now[0], now[1], now[2], l1);
+    if (q1 < o_.min_triangle_quality && q1 < triangle_quality(was[0], was[1], was[2], l0)) return Rejection::Sliver;
+    return Rejection::None;
+  }
   /// Whether face f, with centroid `centroid` (absolute, not relative to the origin) and normal n,
   /// faces against the input face nearest its centroid (as count_flipped_faces() sees it), where in the
   /// input it did not. The search starts at the input face found nearest f last time (at first f

@@ -123,17 +123,8 @@ Rejection Engine::geometry(Lane& lane, Index u, Index v, const Eigen::Vector3d& 
         if (q == moved) after[k] = p;
       }
       if (has_other) continue;  // vanishes
-      const Eigen::Vector3d n0 = (before[1] - before[0]).cross(before[2] - before[0]);
-      const Eigen::Vector3d n1 = (after[1] - after[0]).cross(after[2] - after[0]);
-      const double l0 = n0.norm(), l1 = n1.norm();
-      if (!(l1 > 0)) return Rejection::Sliver;
-      // Against the face's last shape, and against its input shape (by a limit of its own): small turns
-      // must not add up to a flip over many collapses.
-      if (l0 > 0 && n1.dot(n0) < cos_max_turn_ * l0 * l1) return Rejection::Flip;
-      if (n1.dot(s_.face_normal0[f].cast<double>()) < cos_max_total_turn_ * l1) return Rejection::Flip;
-      const double q1 = triangle_quality(after[0], after[1], after[2], l1);
-      if (q1 < o_.min_triangle_quality && q1 < triangle_quality(before[0], before[1], before[2], l0))
-        return Rejection::Sliver;
+      Eigen::Vector3d n1;
+      if (const Rejection r = face_move(f, before, after, n1); r != Rejection::None) return r;
       if (against_input) {
         const Eigen::Vector3d centroid = (after[0] + after[1] + after[2]) / 3.0 + s_.origin;
         if (!nearest_input_[f].certificate.settles(centroid, n1)) unsettled.push_back({f, centroid, n1});

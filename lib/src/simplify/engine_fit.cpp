@@ -1,11 +1,9 @@
 // The cost's fit after the collapses (hoppe: hoppe_fit.cpp), held to the collapses' own limits: a face
-// that the fit would turn further than one collapse may (max_normal_change_deg), turn past its limit
-// from its input shape, thin below the quality floor or (inverted_faces avoid or refuse) leave facing
+// that the fit would move past them (face_move()) or, under inverted_faces avoid or refuse, leave facing
 // against the input sends its corners back where they were, until no face does. A pass that does not
 // lower the cost's measure is undone and ends the fit.
 #include <chrono>
 
-#include "core/geometry.h"
 #include "simplify/collapse_engine.h"
 
 namespace lodkit::detail {
@@ -20,8 +18,7 @@ void Engine::fit_points(SimplifyResult& result) {
   for (int pass = 0; pass < o_.hoppe_fit_passes; ++pass) {
     const std::vector<Eigen::Vector3d> before = s_.position;
     const std::optional<double> energy_before = cost_->fit(s_, pass);
-    if (!energy_before) {
-      s_.position = before;
+    if (!energy_before) {  // (nothing moved)
       if (pass == 0) return;  // the cost has no fit
       break;
     }
@@ -64,17 +61,10 @@ bool Engine::move_breaks_limits(Index f, const std::vector<Eigen::Vector3d>& bef
     moved |= was[k] != now[k];
   }
   if (!moved) return false;
-  const Eigen::Vector3d n0 = (was[1] - was[0]).cross(was[2] - was[0]), n1 = (now[1] - now[0]).cross(now[2] - now[0]);
-  const double l0 = n0.norm(), l1 = n1.norm();
-  if (!(l1 > 0)) return true;
-  // As a collapse is checked (geometry()): the turn in this step, and from the input shape where the
-  // face kept within that before.
-  if (l0 > 0 && n1.dot(n0) < cos_max_turn_ * l0 * l1) return true;
-  const Eigen::Vector3d input = s_.face_normal0[f].cast<double>();
-  if (n1.dot(input) < cos_max_total_turn_ * l1 && !(n0.dot(input) < cos_max_total_turn_ * l0)) return true;
-  const double q1 = triangle_quality(now[0], now[1], now[2], l1);
-  if (q1 < o_.min_triangle_quality && q1 < triangle_quality(was[0], was[1], was[2], l0)) return true;
+  Eigen::Vector3d n1;
+  if (face_move(f, was, now, n1) != Rejection::None) return true;
   if (check_inverted_) {
+    const Eigen::Vector3d n0 = (was[1] - was[0]).cross(was[2] - was[0]);
     const Eigen::Vector3d c1 = (now[0] + now[1] + now[2]) / 3.0 + s_.origin, c0 = (was[0] + was[1] + was[2]) / 3.0 + s_.origin;
     if (faces_against_input(f, c1, n1) && !faces_against_input(f, c0, n0)) return true;
   }

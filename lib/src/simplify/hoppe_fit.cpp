@@ -58,6 +58,17 @@ std::vector<std::uint64_t> curve_keys(const BoundaryCurves& curves) {
   return keys;
 }
 
+// A boundary point x held at weight 1 - t on a and t on b: its squared distance there.
+double on_edge_distance2(const EngineState& s, Index a, Index b, double t, const Vec& x) {
+  return (s.position[a] + t * (s.position[b] - s.position[a]) - x).squaredNorm();
+}
+
+double spring_energy(const EngineState& s, const std::vector<std::pair<Index, Index>>& edges, double kappa) {
+  double e = 0;
+  for (const auto& [a, b] : edges) e += kappa * (s.position[a] - s.position[b]).squaredNorm();
+  return e;
+}
+
 double spring_constant_of(const FaceSamples& samples, const std::vector<Index>& faces) {
   std::size_t points = 0;
   for (Index f : faces) points += samples[f].size();
@@ -145,12 +156,10 @@ double points_energy(const EngineState& s, const FaceSamples& samples, const Bou
     const auto [a, b] = BoundaryCurves::edge_of(key);
     for (Index i : curves.edge_points.at(key)) {
       const Vec& x = curves.point[i];
-      energy += (s.position[a] + segment_parameter(x, s.position[a], s.position[b]) * (s.position[b] - s.position[a]) - x).squaredNorm();
+      energy += on_edge_distance2(s, a, b, segment_parameter(x, s.position[a], s.position[b]), x);
     }
   }
-  const double kappa = spring_constant_of(samples, faces);
-  for (const auto& [a, b] : edges_of(s, faces)) energy += kappa * (s.position[a] - s.position[b]).squaredNorm();
-  return energy;
+  return energy + spring_energy(s, edges_of(s, faces), spring_constant_of(samples, faces));
 }
 
 std::optional<double> fit_points(EngineState& s, FaceSamples& samples, const BoundaryCurves& curves, bool reassign) {
@@ -193,7 +202,7 @@ std::optional<double> fit_points(EngineState& s, FaceSamples& samples, const Bou
     for (Index i : curves.edge_points.at(key)) {
       const Vec& x = curves.point[i];
       const double t = segment_parameter(x, s.position[a], s.position[b]);
-      before += (s.position[a] + t * (s.position[b] - s.position[a]) - x).squaredNorm();
+      before += on_edge_distance2(s, a, b, t, x);
       const Index c[2] = {a, b};
       const double w[2] = {1 - t, t};
       add_term(c, 2, [&](int j, int k) { return w[j] * w[k]; }, [&](int j) { return Eigen::RowVector3d(w[j] * x.transpose()); });
@@ -201,8 +210,8 @@ std::optional<double> fit_points(EngineState& s, FaceSamples& samples, const Bou
   }
   const double kappa = spring_constant_of(samples, faces);
   const std::vector<std::pair<Index, Index>> edges = edges_of(s, faces);
+  before += spring_energy(s, edges, kappa);
   for (const auto& [a, b] : edges) {
-    before += kappa * (s.position[a] - s.position[b]).squaredNorm();
     const Index c[2] = {a, b};
     add_term(c, 2, [&](int j, int k) { return j == k ? kappa : -kappa; }, [](int) { return Eigen::RowVector3d::Zero().eval(); });
   }
