@@ -67,6 +67,13 @@ Index remove_unreferenced_vertices(Mesh& mesh);
 /// use to weld seams for topology while keeping the seam vertices themselves.
 Eigen::VectorX<Index> position_classes(const Mesh& mesh);
 
+/// Turns faces (swaps two corners) so that neighbours agree on orientation: two faces that share an
+/// edge (vertices welded by position) run it in opposite directions. Only patches (faces joined across
+/// edges of two faces) that disagree somewhere change, and only where they can: a non-orientable patch
+/// (a Moebius band) stays as it is. A closed patch ends up enclosing a positive volume (normals
+/// outwards), an open one facing the way most of its area faced. Returns the number of faces turned.
+Index orient_consistently(Mesh& mesh);
+
 /// Signed enclosed volume (divergence theorem, about the bounding-box centre for precision). Meaningful
 /// for closed, consistently oriented meshes; negative when faces point inward.
 double signed_volume(const Mesh& mesh);

@@ -1,6 +1,6 @@
 #pragma once
 // Edge and fan classification over faces given on (welded) point indices: shared by inspect(), which
-// counts defects, and the simplifier, which locks them.
+// counts defects, and the simplifier, which locks them; and the faces that turn to make a mesh agree.
 #include <lodkit/mesh.h>
 
 #include <array>
@@ -20,5 +20,11 @@ std::vector<EdgeUse> classify_edges(const std::vector<std::array<Index, 3>>& fac
 
 /// For each point, whether the faces around it fail to form a single fan (a "bow tie").
 std::vector<char> non_manifold_fans(Index num_points, const std::vector<std::array<Index, 3>>& faces);
+
+/// The faces orient_consistently() turns, ascending (none when every patch agrees with itself).
+std::vector<Index> faces_to_turn(const Mesh& mesh);
+
+/// Swaps corners 1 and 2 of each of `faces`.
+void turn_faces(Mesh& mesh, const std::vector<Index>& faces);
 
 }  // namespace lodkit::detail

@@ -1,0 +1,139 @@
+// orient_consistently(): faces turned to agree on orientation.
+#include <gtest/gtest.h>
+#include <lodkit/inspect.h>
+#include <lodkit/primitives.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "test_util.h"
+
+namespace lodkit {
+namespace {
+
+void turn(Mesh& mesh, Index f) { std::swap(mesh.triangles(f, 1), mesh.triangles(f, 2)); }
+
+/// `mesh` with each face turned with probability 1/2 (seeded); `turned` counts them.
+Mesh shuffled(const Mesh& mesh, Index& turned, unsigned seed = 3) {
+  Mesh out = mesh;
+  std::mt19937 rng(seed);
+  turned = 0;
+  for (Index f = 0; f < out.num_faces(); ++f)
+    if (rng() & 1) turn(out, f), ++turned;
+  return out;
+}
+
+/// A Moebius band: `n` quads around a loop, each two triangles, the last joined to the first with a half twist.
+Mesh moebius_band(int n = 24) {
+  Mesh m;
+  m.positions.resize(2 * n, 3);
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * std::numbers::pi * i / n, half = 0.5 * t;
+    for (int side = 0; side < 2; ++side) {
+      const double s = side ? 0.3 : -0.3;
+      m.positions.row(2 * i + side) << (1 + s * std::cos(half)) * std::cos(t), (1 + s * std::cos(half)) * std::sin(t),
+          s * std::sin(half);
+    }
+  }
+  m.triangles.resize(2 * n, 3);
+  for (int i = 0; i < n; ++i) {
+    const Index a = 2 * i, b = 2 * i + 1;
+    // The last quad meets the first column turned over: its sides swap.
+    const Index c = i + 1 < n ? 2 * (i + 1) : 1, d = i + 1 < n ? 2 * (i + 1) + 1 : 0;
+    m.triangles.row(2 * i) << a, c, b;
+    m.triangles.row(2 * i + 1) << b, c, d;
+  }
+  return m;
+}
+
+TEST(Orient, TurnsAShuffledSphereBackFaceForFace) {
+  const Mesh sphere = make_icosphere({.subdivisions = 3});
+  ASSERT_GT(*inspect(sphere).volume, 0);
+  Index turned = 0;
+  Mesh m = shuffled(sphere, turned);
+  ASSERT_GT(turned, 100);
+  EXPECT_FALSE(inspect(m).oriented);
+  // Closed: the orientation that encloses a positive volume, which is the sphere's own.
+  EXPECT_EQ(orient_consistently(m), turned);
+  EXPECT_EQ(m.triangles, sphere.triangles);
+  EXPECT_EQ(orient_consistently(m), 0);  // nothing left to do
+}
+
+TEST(Orient, TurnsAnInsideOutShuffledSphereOutwards) {
+  Mesh inside_out = make_icosphere({.subdivisions = 2});
+  for (Index f = 0; f < inside_out.num_faces(); ++f) turn(inside_out, f);
+  Index turned = 0;
+  Mesh m = shuffled(inside_out, turned, 5);
+  // Every face still inside out gets turned: those the shuffle left.
+  EXPECT_EQ(orient_consistently(m), m.num_faces() - turned);
+  const MeshReport r = inspect(m);
+  EXPECT_TRUE(r.oriented);
+  EXPECT_GT(*r.volume, 0);
+}
+
+TEST(Orient, LeavesPatchesThatAgreeAsTheyAre) {
+  // A sphere inside out but consistent stays inside out: only disagreement is mended.
+  Mesh inside_out = make_icosphere({.subdivisions = 2});
+  for (Index f = 0; f < inside_out.num_faces(); ++f) turn(inside_out, f);
+  Mesh m = inside_out;
+  EXPECT_EQ(orient_consistently(m), 0);
+  EXPECT_EQ(m.triangles, inside_out.triangles);
+  // Beside a shuffled one, in one mesh: only the shuffled part changes.
+  Mesh sphere = make_icosphere({.subdivisions = 2});
+  sphere.positions.col(0).array() += 3.0;  // apart: faces join where their corners coincide
+  Index turned = 0;
+  Mesh both = concatenated(inside_out, shuffled(sphere, turned));
+  EXPECT_EQ(orient_consistently(both), turned);
+  EXPECT_EQ(both.triangles, concatenated(inside_out, sphere).triangles);
+}
+
+TEST(Orient, OpenPatchKeepsTheWayMostOfItsAreaFaced) {
+  const Mesh grid = make_grid({.divisions_x = 12, .divisions_y = 12});
+  Mesh m = grid;
+  for (Index f = 0; f < m.num_faces(); f += 5) turn(m, f);  // a fifth turned
+  EXPECT_EQ(orient_consistently(m), (m.num_faces() + 4) / 5);
+  EXPECT_EQ(m.triangles, grid.triangles);
+  // The other way round: four fifths turned, the patch ends up facing -z.
+  Mesh most = grid;
+  for (Index f = 0; f < most.num_faces(); ++f)
+    if (f % 5 != 0) turn(most, f);
+  EXPECT_EQ(orient_consistently(most), (most.num_faces() + 4) / 5);
+  for (Index f = 0; f < most.num_faces(); ++f) {
+    const Eigen::Vector3d a = most.positions.row(most.triangles(f, 0)), b = most.positions.row(most.triangles(f, 1)),
+                          c = most.positions.row(most.triangles(f, 2));
+    EXPECT_LT((b - a).cross(c - a).z(), 0) << "face " << f;
+  }
+}
+
+TEST(Orient, JoinsFacesByPositionAcrossUnweldedVertices) {
+  // Three vertices per face (a soup of one sphere): faces still meet where their corners coincide.
+  const Mesh soup = test::flat_shaded(make_icosphere({.subdivisions = 2}));
+  Index turned = 0;
+  Mesh m = shuffled(soup, turned);
+  EXPECT_EQ(orient_consistently(m), turned);
+  EXPECT_EQ(m.triangles, soup.triangles);
+}
+
+TEST(Orient, LeavesANonOrientableBandAlone) {
+  const Mesh band = moebius_band();
+  ASSERT_FALSE(inspect(band).oriented);
+  Mesh m = band;
+  EXPECT_EQ(orient_consistently(m), 0);
+  EXPECT_EQ(m.triangles, band.triangles);
+}
+
+TEST(Orient, EmptyAndDegenerateFacesAreLeft) {
+  Mesh empty;
+  EXPECT_EQ(orient_consistently(empty), 0);
+  Mesh m = make_icosphere({.subdivisions = 1});
+  const Index n = m.num_faces();
+  m.triangles.conservativeResize(n + 1, 3);
+  m.triangles.row(n) << 0, 0, 1;  // no three distinct corners: joins nothing
+  turn(m, 3);
+  EXPECT_EQ(orient_consistently(m), 1);
+  EXPECT_EQ(m.triangles.row(n), Eigen::RowVector3i(0, 0, 1));
+}
+
+}  // namespace
+}  // namespace lodkit
