@@ -314,6 +314,37 @@ TEST(CliSimplify, HoppesFitIsReportedAndCanBeTurnedOff) {
   EXPECT_FALSE(std::filesystem::exists(dir / "t.ply"));
 }
 
+TEST(CliSimplify, FacesThatDisagreeOnOrientationAreTurnedFirstAndSaidSo) {
+  // Every other face of a sphere turned: the JSON counts the faces turned, the summary says it, and
+  // --measure counts faces facing against the turned input (none), not against the shuffled one.
+  test::ScratchDir dir("cli-simplify-orient");
+  Mesh m = test::bumpy_sphere(3, 0.02);
+  Index turned = 0;
+  for (Index f = 0; f < m.num_faces(); f += 2) std::swap(m.triangles(f, 1), m.triangles(f, 2)), ++turned;
+  write_mesh(m, (dir / "s.ply").string());
+  CliRun r = run(dir, "simplify s.ply -o o.ply --ratio 0.1 --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["reason"], "target");
+  EXPECT_EQ(j["measured"]["inverted_faces"].get<Index>(), 0);
+  const Index reoriented = j["reoriented_faces"].get<Index>();
+  EXPECT_TRUE(reoriented == turned || reoriented == m.num_faces() - turned) << reoriented;
+  EXPECT_TRUE(inspect(read_mesh((dir / "o.ply").string())).oriented);
+  r = run(dir, "simplify s.ply -o o.ply --ratio 0.1 --method schroeder");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("faces of the input to agree with their neighbours' orientation first"), std::string::npos) << r.err;
+  // Kept as they are, the disagreeing edges lock their ends, and the reason says so.
+  r = run(dir, "simplify s.ply -o k.ply --ratio 0.1 --keep-orientation --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto k = nlohmann::json::parse(r.out);
+  EXPECT_EQ(k["reason"], "no-legal-collapse");
+  EXPECT_EQ(k["reoriented_faces"].get<Index>(), 0);
+  EXPECT_NE(k["reason_text"].get<std::string>().find("disagreeing on orientation"), std::string::npos) << k;
+  r = run(dir, "pm build s.ply -o s.pm --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["reoriented_faces"].get<Index>(), reoriented);
+}
+
 TEST(CliSimplify, ReasonIsPrintedWhenTheTargetIsOutOfReach) {
   test::ScratchDir dir("cli-simplify");
   ASSERT_EQ(run(dir, "generate box -o b.ply --divisions 4").status, 0);

@@ -1,7 +1,10 @@
-// orient_consistently(): faces turned to agree on orientation.
+// orient_consistently(), and the methods on an input whose faces disagree on orientation.
 #include <gtest/gtest.h>
+#include <lodkit/decimate.h>
 #include <lodkit/inspect.h>
 #include <lodkit/primitives.h>
+#include <lodkit/progressive.h>
+#include <lodkit/simplify.h>
 
 #include <cmath>
 #include <numbers>
@@ -133,6 +136,79 @@ TEST(Orient, EmptyAndDegenerateFacesAreLeft) {
   turn(m, 3);
   EXPECT_EQ(orient_consistently(m), 1);
   EXPECT_EQ(m.triangles.row(n), Eigen::RowVector3i(0, 0, 1));
+}
+
+// The methods on a shuffled sphere: without turning, the disagreeing edges lock their ends and
+// nothing reaches the target; turned first, every method does, with the topology kept and faces agreeing.
+class ShuffledInput : public ::testing::Test {
+ protected:
+  void SetUp() override { input = shuffled(test::bumpy_sphere(3, 0.02), turned); }
+  Mesh input;
+  Index turned = 0;
+};
+
+void expect_oriented_sphere(const Mesh& out) {
+  const MeshReport r = inspect(out);
+  EXPECT_TRUE(r.oriented);
+  EXPECT_TRUE(r.closed);
+  EXPECT_EQ(r.euler_characteristic, 2);
+  EXPECT_GT(*r.volume, 0);
+}
+
+TEST_F(ShuffledInput, EveryCollapseMethodReachesItsTarget) {
+  for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe, SimplifyMethod::EdgeLength}) {
+    SCOPED_TRACE(to_string(method));
+    SimplifyOptions o;
+    o.method = method;
+    o.target_faces = input.num_faces() / 10;
+    const SimplifyResult r = simplify(input, o);
+    EXPECT_EQ(r.reoriented_faces, turned);
+    EXPECT_EQ(r.reason, StopReason::TargetReached);
+    EXPECT_LE(r.faces_out, *o.target_faces);
+    expect_oriented_sphere(r.mesh);
+
+    o.orient_faces = false;
+    const SimplifyResult kept = simplify(input, o);
+    EXPECT_EQ(kept.reoriented_faces, 0);
+    EXPECT_EQ(kept.reason, StopReason::NoLegalCollapse);
+    EXPECT_GT(kept.faces_out, 4 * *o.target_faces);
+  }
+}
+
+TEST_F(ShuffledInput, SchroederReachesItsTarget) {
+  DecimateOptions o;
+  o.target_faces = input.num_faces() / 10;
+  const DecimateResult r = decimate(input, o);
+  EXPECT_EQ(r.reoriented_faces, turned);
+  EXPECT_TRUE(r.target_reached);
+  expect_oriented_sphere(r.mesh);
+  o.orient_faces = false;
+  EXPECT_FALSE(decimate(input, o).target_reached);
+}
+
+TEST_F(ShuffledInput, ProgressiveMeshRefinesToTheTurnedInput) {
+  ProgressiveOptions po;
+  po.base_faces = 20;
+  const ProgressiveMesh pm = build_progressive_mesh(input, po);
+  EXPECT_LE(pm.num_faces(0), 20);
+  Mesh turned_input = input;
+  orient_consistently(turned_input);
+  const ExtractedLevel full = extract_level(pm, pm.max_level(), VertexOrder::Input);
+  EXPECT_EQ(full.mesh.triangles, turned_input.triangles);
+  EXPECT_EQ(full.mesh.positions, turned_input.positions);
+  expect_oriented_sphere(extract_level(pm, pm.max_level() / 2, VertexOrder::Input).mesh);
+}
+
+TEST_F(ShuffledInput, SimplifyWithinAHausdorffLimitTurnsItToo) {
+  SimplifyOptions o;
+  o.target_faces = input.num_faces() / 10;
+  const double limit = 0.05 * inspect(input).diagonal;
+  const SimplifyResult r = simplify_within(input, limit, o);
+  EXPECT_EQ(r.reoriented_faces, turned);
+  EXPECT_LE(r.faces_out, *o.target_faces);
+  ASSERT_TRUE(r.within);
+  EXPECT_LE(r.within->bound, limit);
+  expect_oriented_sphere(r.mesh);
 }
 
 }  // namespace

@@ -22,7 +22,7 @@ struct PmCliOptions {
   std::optional<std::string> format;
   std::optional<Index> base_faces;
   int quantize = 0;
-  bool draco = false, keep_order = false, json = false, measure = false, drop_normals = false;
+  bool draco = false, keep_order = false, json = false, measure = false, drop_normals = false, keep_orientation = false;
   Index block = 1024;
   std::vector<double> attribute_weights;
   std::optional<std::string> inverted_faces;  // allow|avoid|refuse; unset: by method, as simplify
@@ -42,8 +42,12 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   const bool had_normals = mesh.has_normals();
   if (o.drop_normals) mesh.attributes.normals.resize(0, 3);
   refuse_to_overwrite(o.output, o.input);
+  // Faces that disagree on orientation lock their shared edges' ends: turned first, as simplify turns
+  // them, so that the stream's full level is the turned input.
+  const Index reoriented = o.keep_orientation ? 0 : orient_consistently(mesh);
   ProgressiveOptions p;
   p.simplify.method = *parse_method(o.method);
+  p.simplify.orient_faces = false;  // turned above, or kept as asked
   if (o.inverted_faces) p.simplify.inverted_faces = parse_inverted_faces(*o.inverted_faces);
   p.base_faces = o.base_faces;
   if (!o.attribute_weights.empty()) {
@@ -68,6 +72,7 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   if (o.json) {
     fmt::print("{}\n", nlohmann::json{{"input", o.input}, {"output", o.output}, {"method", o.method},
                                       {"faces", mesh.num_faces()}, {"vertices", mesh.num_vertices()},
+                                      {"reoriented_faces", reoriented},
                                       {"base_faces", pm.num_faces(0)}, {"splits", pm.max_level()},
                                       {"build_seconds", build_seconds}, {"write_seconds", write_seconds},
                                       {"measured_levels", pm.measured.size()}, {"measure_seconds", measure_seconds},
@@ -78,6 +83,9 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   } else if (!global.quiet) {
     fmt::print(stderr, "pm build ({}): {} faces -> base of {} faces + {} splits in {:.3f} s\n", o.method,
                thousands(mesh.num_faces()), thousands(pm.num_faces(0)), thousands(pm.max_level()), build_seconds);
+    if (reoriented > 0)
+      fmt::print(stderr, "  turned {} faces of the input to agree with their neighbours' orientation first "
+                 "(--keep-orientation leaves them)\n", thousands(reoriented));
     if (o.measure)
       fmt::print(stderr, "  measured {} levels' distances to the input in {:.3f} s\n", pm.measured.size(), measure_seconds);
     if (had_normals && !o.drop_normals && 2 * pm.num_faces(0) > mesh.num_faces())
@@ -330,9 +338,13 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
       ->delimiter(',')->check(kNonNegative);
   build->add_flag("--drop-normals", opt->drop_normals,
                   "Build without the input's normals (flat shading makes every edge a seam); levels then have none");
+  build->add_flag("--keep-orientation", opt->keep_orientation,
+                  "Leave faces that disagree with their neighbours' orientation as they are (the ends of their "
+                  "shared edges then stay locked); by default they are turned to agree first");
   build->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   build->footer(R"(Lossless streams reproduce the input exactly (positions bit for bit, same triangles in the
-same order; without its normals with --drop-normals); --quantize BITS gives a compact stream in stream order.
+same order; without its normals with --drop-normals; faces that disagreed on orientation turned to
+agree unless --keep-orientation); --quantize BITS gives a compact stream in stream order.
 Examples:
   lodkit pm build bunny.ply -o bunny.pm
   lodkit pm build scan.obj -o scan.pm --quantize 14 --draco --base-faces 500

@@ -26,7 +26,7 @@ struct SimplifyCliOptions {
   double distance = ScreenSpaceBudget{}.distance, fov = ScreenSpaceBudget{}.fov_degrees,
          viewport = ScreenSpaceBudget{}.viewport_pixels;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
-  bool measure = false, json = false, recompute_normals = false, no_inverted_faces = false;
+  bool measure = false, json = false, recompute_normals = false, no_inverted_faces = false, keep_orientation = false;
   std::optional<std::string> inverted_faces;  // allow|avoid|refuse; unset: by method
   double max_normal_change = SimplifyOptions{}.max_normal_change_deg, crease_weight = SimplifyOptions{}.crease_weight;
   std::vector<double> attribute_weights;
@@ -119,9 +119,20 @@ struct Measured {
 
 // Nothing when the output has no faces (every face of the input was degenerate): there is no surface to
 // measure, and failing there, after the output was written, would report a run that did its job as failed.
-std::optional<Measured> measure(const Mesh& input, const Mesh& output) {
+// Faces count as facing against the input as the method saw it: with its faces turned to agree where
+// they did not (`reoriented` of them; orient_faces), else half of a shuffled input's would.
+std::optional<Measured> measure(const Mesh& input, const Mesh& output, Index reoriented) {
   if (output.num_faces() == 0) return std::nullopt;
-  return Measured{compare(input, output), count_flipped_faces(input, output)};
+  if (reoriented == 0) return Measured{compare(input, output), count_flipped_faces(input, output)};
+  Mesh turned = input;
+  orient_consistently(turned);
+  return Measured{compare(input, output), count_flipped_faces(turned, output)};
+}
+
+void print_reoriented(Index faces) {
+  if (faces > 0)
+    fmt::print(stderr, "  turned {} faces of the input to agree with their neighbours' orientation first "
+               "(--keep-orientation leaves them)\n", thousands(faces));
 }
 constexpr const char* kNotMeasured = "the output has no faces";
 
@@ -158,17 +169,18 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   d.feature_angle_deg = o.feature_angle;
   d.aspect_ratio = o.aspect_ratio;
   d.accumulate_error = o.accumulate_error;
+  d.orient_faces = !o.keep_orientation;
   DecimateResult r = decimate(mesh, d);
   if (o.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
   std::optional<Measured> measured;
-  if (o.measure) measured = measure(mesh, r.mesh);
+  if (o.measure) measured = measure(mesh, r.mesh, r.reoriented_faces);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
   const auto& c = r.remaining_by_class;
   if (o.json) {
     nlohmann::json j{{"input", o.input}, {"output", o.output}, {"method", "schroeder"}, {"faces_in", r.faces_in},
                      {"faces_out", r.faces_out}, {"vertices_in", r.vertices_in}, {"vertices_out", r.vertices_out},
-                     {"removed", r.removed}, {"seconds", r.seconds}, {"error_estimate", r.error},
+                     {"removed", r.removed}, {"reoriented_faces", r.reoriented_faces}, {"seconds", r.seconds}, {"error_estimate", r.error},
                      {"error_estimate_percent", r.error * pct}, {"target_reached", r.target_reached},
                      {"reason_text", r.reason_text},
                      {"remaining", {{"simple", c[0]}, {"complex", c[1]}, {"boundary", c[2]}, {"interior_edge", c[3]},
@@ -179,6 +191,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   } else if (!global.quiet) {
     fmt::print(stderr, "simplify (schroeder): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", thousands(r.faces_in),
                thousands(r.faces_out), thousands(r.vertices_in), thousands(r.vertices_out), r.seconds);
+    print_reoriented(r.reoriented_faces);
     fmt::print(stderr, "  largest removal error {:.6g} ({:.4f}% of the diagonal){}\n", r.error, r.error * pct,
                d.accumulate_error ? ", accumulated" : "");
     if (o.measure) print_measured(measured);
@@ -214,6 +227,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     s.attribute_weights = {o.attribute_weights[0], o.attribute_weights[1], o.attribute_weights[2]};
   }
   s.recompute_normals = o.recompute_normals;
+  s.orient_faces = !o.keep_orientation;
   if (o.inverted_faces) s.inverted_faces = parse_inverted_faces(*o.inverted_faces);
   if (o.no_inverted_faces) s.inverted_faces = InvertedFaces::Refuse;
   s.seed = o.seed;
@@ -249,7 +263,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
 
   std::optional<Measured> measured;
-  if (o.measure) measured = measure(mesh, r.mesh);
+  if (o.measure) measured = measure(mesh, r.mesh, r.reoriented_faces);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
   const std::optional<std::string> hint = stop_hint(r, o, mesh);
   if (o.json) {
@@ -259,7 +273,8 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                      {"collapses", r.collapses}, {"seconds", r.seconds}, {"error_estimate", r.error},
                      {"error_estimate_percent", r.error * pct}, {"reason", reason_name(r.reason)},
                      {"reason_text", r.reason_text}, {"locked_vertices", r.locked_vertices}, {"lanes", r.lanes},
-                     {"dropped_degenerate_faces", r.dropped_degenerate_faces}};
+                     {"dropped_degenerate_faces", r.dropped_degenerate_faces},
+                     {"reoriented_faces", r.reoriented_faces}};
     if (r.reason != StopReason::TargetReached && !r.within) j["blocked"] = blocked_json(r.blocked);
     if (r.within) {
       j["hausdorff_limit"] = within_json(*r.within, pct);
@@ -300,6 +315,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     fmt::print(stderr, "simplify ({}): {} -> {} faces, {} -> {} vertices in {:.3f} s\n", o.method,
                thousands(r.faces_in), thousands(r.faces_out), thousands(r.vertices_in), thousands(r.vertices_out),
                r.seconds);
+    print_reoriented(r.reoriented_faces);
     if (r.within)
       fmt::print(stderr, "  Hausdorff distance to the input proved at most {:.6g} ({:.4f}%), {} levels checked\n",
                  r.within->bound, r.within->bound * pct, r.within->checks);
@@ -421,6 +437,9 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::Range(0, 1000));
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
+  sub->add_flag("--keep-orientation", opt->keep_orientation,
+                "Leave faces that disagree with their neighbours' orientation as they are (the ends of their "
+                "shared edges then stay locked); by default they are turned to agree first");
   add_inverted_faces_option(sub, opt->inverted_faces);
   sub->add_flag("--no-inverted-faces", opt->no_inverted_faces, "The same as --inverted-faces refuse")
       ->excludes("--inverted-faces");

@@ -35,12 +35,16 @@ struct DecimateOptions {
   double aspect_ratio = 0.1;
   /// Add each removal's error to its neighbours (a conservative global bound).
   bool accumulate_error = false;
+  /// First turn the faces of an inconsistently oriented input to agree (orient_consistently(), on a
+  /// copy), as simplify() does (SimplifyOptions::orient_faces): a vertex whose faces disagree is complex.
+  bool orient_faces = true;
 };
 
 struct DecimateResult {
   Mesh mesh;
   Index faces_in = 0, faces_out = 0, vertices_in = 0, vertices_out = 0;
   Index removed = 0;
+  Index reoriented_faces = 0;  ///< input faces turned to agree with their neighbours first (orient_faces)
   double error = 0.0;  ///< largest error of a removal (accumulated when asked)
   bool target_reached = false;
   std::string reason_text;

@@ -126,6 +126,11 @@ struct SimplifyOptions {
 
   bool preserve_topology = true;   ///< link condition and flip checks (off only to show failure)
   bool lock_boundary = false;      ///< boundary vertices never move or disappear
+  /// First turn the faces of an inconsistently oriented input to agree (orient_consistently(), on a
+  /// copy): the ends of an edge whose two faces run it the same way are locked, so such an input barely
+  /// simplifies (a blob with its faces turned at random: 4,050 -> 3,900 faces at any target). The
+  /// output's faces then agree with one another; refit and face checks measure against the turned copy.
+  bool orient_faces = true;
   double boundary_weight = 10.0;   ///< weight of boundary constraint planes (quadric); higher keeps borders
   /// Weight of crease planes (quadric method only): planes through folded edges that keep thin fins, spikes and
   /// sharp ridges from sliding inwards; a fully folded edge weighs like a border edge at 10. 0 = off.
@@ -247,7 +252,7 @@ struct CollapseRecord {
 /// under the more specific of its two directions' reasons. All zero when the target was reached.
 struct BlockedEdges {
   Index remaining = 0;    ///< edges left in the output
-  Index locked = 0;       ///< an end is locked (non-manifold input, or a locked boundary)
+  Index locked = 0;       ///< an end is locked (non-manifold input, faces that disagree on orientation, or a locked boundary)
   Index topology = 0;     ///< the link condition: the result would not stay 2-manifold, or a part would vanish
   Index boundary = 0;     ///< a boundary point would leave its boundary
   Index seams = 0;        ///< an attribute seam would break
@@ -273,6 +278,7 @@ struct SimplifyResult {
   BlockedEdges blocked;             ///< the same reasons as counts, when it stopped short
   Index locked_vertices = 0;        ///< on non-manifold edges or fans (or the boundary when locked)
   Index dropped_degenerate_faces = 0;
+  Index reoriented_faces = 0;       ///< input faces turned to agree with their neighbours first (orient_faces)
   int lanes = 1;                    ///< slabs simplified side by side first (see lane_faces), or 1
   /// Faces left when the run, stuck above its target under the method's default limit on a face's turn
   /// from its input shape, went on with 90 degrees (see max_total_normal_change_deg); unset if it did not.

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <fmt/format.h>
 
+#include "core/topology.h"
+
 namespace lodkit {
 namespace {
 
@@ -42,8 +44,14 @@ void copy_attributes(const Mesh& mesh, Index v, double* out) {
 
 }  // namespace
 
-ProgressiveMesh build_progressive_mesh(const Mesh& mesh, const ProgressiveOptions& options) {
-  validate(mesh, "progressive mesh");
+ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptions& options) {
+  validate(input, "progressive mesh");
+  // An input whose faces disagree on orientation is built with them turned (SimplifyOptions::orient_faces;
+  // simplify() leaves that to its caller when it records, as the records name the corners replayed here).
+  Mesh turned;
+  const std::vector<Index> turn = options.simplify.orient_faces ? detail::faces_to_turn(input) : std::vector<Index>{};
+  if (!turn.empty()) turned = input, detail::turn_faces(turned, turn);
+  const Mesh& mesh = turn.empty() ? input : turned;
   if (options.base_faces && *options.base_faces < 0)
     throw Error(fmt::format("progressive mesh: base face count must not be negative, got {}", *options.base_faces));
   SimplifyOptions so = options.simplify;

@@ -106,6 +106,8 @@ class Engine {
   Engine(const Mesh& mesh, const SimplifyOptions& options);
 
   SimplifyResult run(Index target);
+  /// Whether two faces of the input run an edge they share the same way (its ends are then locked).
+  bool faces_disagree() const { return faces_disagree_; }
 
  private:
   // engine_setup.cpp: from the input to the engine's state.
@@ -302,6 +304,7 @@ class Engine {
   // Result bookkeeping.
   double max_error_ = 0;
   Index collapses_ = 0, locked_ = 0, dropped_ = 0;
+  bool faces_disagree_ = false;
   Index target_ = 0;  // the run's face target
   Index faces_before_ = 0, next_report_ = 0;  // for the progress callback
   int lanes_used_ = 1;

@@ -253,7 +253,7 @@ std::string Engine::stop_report(Index target, BlockedEdges& blocked) {
   blocked.flips = count(Rejection::Flip), blocked.inverted = count(Rejection::Inverted);
   blocked.slivers = count(Rejection::Sliver);
   blocked.error_limit = count(Rejection::ErrorLimit), blocked.cost = count(Rejection::Cost);
-  const char* names[] = {"", "locked (non-manifold or locked boundary) vertices", "topology (link condition)",
+  const char* names[] = {"", "locked (non-manifold, disagreeing on orientation, or a locked boundary) vertices", "topology (link condition)",
                          "boundary rules", "attribute seams", "the valence limit", "face flips",
                          "faces that would face against the input (inverted_faces)", "slivers",
                          "the error limit", "the cost"};

@@ -121,6 +121,7 @@ void Engine::setup(const Mesh& mesh) {
       s_.input_boundary.push_back({s_.corner_point(f, k), s_.corner_point(f, (k + 1) % 3)});
     }
     if (e.faces > 2 || !e.consistent) s_.flags[e.lo] |= kLocked, s_.flags[e.hi] |= kLocked;
+    faces_disagree_ |= e.faces == 2 && !e.consistent;
   }
   std::sort(s_.input_boundary.begin(), s_.input_boundary.end());
   const std::vector<char> fans = non_manifold_fans(points, point_faces);

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
+#include <optional>
 
 #include "core/geometry.h"
 #include "simplify/collapse_engine.h"
@@ -54,20 +55,34 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
                            : detail::requested_faces(mesh, options);
   if (options.recompute_normals && options.record_collapses)
     throw Error("simplify: recompute_normals cannot be combined with record_collapses");
-  SimplifyResult r;
+  // A copy without normals: the engine welds vertices that differed only by them.
+  Mesh positions_only;
   if (options.recompute_normals && mesh.has_normals()) {
-    // A copy without normals: the engine welds vertices that differed only by them.
-    Mesh positions_only = mesh;
+    positions_only = mesh;
     positions_only.attributes.normals.resize(0, 3);
-    r = detail::Engine(positions_only, options).run(target);
-  } else {
-    r = detail::Engine(mesh, options).run(target);
   }
+  const Mesh& engine_input = positions_only.empty() ? mesh : positions_only;
+  std::optional<detail::Engine> engine;
+  engine.emplace(engine_input, options);
+  // Faces that disagree on orientation lock their edges' ends. The engine's setup finds them, so only
+  // such an input pays for the turning and a second setup. (Recorded collapses name the caller's corners:
+  // build_progressive_mesh() turns its input itself.)
+  Mesh turned;
+  Index turned_faces = 0;
+  if (options.orient_faces && !options.record_collapses && engine->faces_disagree()) {
+    turned = engine_input;
+    turned_faces = orient_consistently(turned);
+    if (turned_faces > 0) engine.emplace(turned, options);
+  }
+  const Mesh& reference = turned_faces > 0 ? turned : mesh;  // what the refit fits to
+  SimplifyResult r = engine->run(target);
+  engine.reset();
+  r.reoriented_faces = turned_faces;
   // The faces keep within the limits the collapses kept: the same turn from their input faces.
   const double total_turn = r.turn_limit_relaxed_at ? detail::kRelaxedTotalTurnDeg : detail::starting_total_turn_deg(options);
   if (const RefitOptions refit = detail::refit_options(mesh, options, total_turn);
       detail::refits(refit) && !options.record_collapses && r.collapses > 0)
-    r.refit = refit_to_input(mesh, r.mesh, refit, r.face_origin);
+    r.refit = refit_to_input(reference, r.mesh, refit, r.face_origin);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;

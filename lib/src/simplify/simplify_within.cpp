@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <optional>
 
+#include "core/topology.h"
 #include "simplify/refit_input.h"
 #include "simplify/target.h"
 
@@ -79,15 +80,17 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   if (!std::isfinite(max_distance) || max_distance < 0)
     throw Error(fmt::format("simplify: the Hausdorff limit must be finite and not negative, got {}", max_distance));
   validate(mesh, "simplify");
-  // The progressive mesh records collapses by vertex, so it cannot drop the input's normals as simplify()
-  // does: it is built from a copy without them, and the output gets fresh ones.
-  Mesh positions_only;
+  // What the levels are built from and measured against: a copy when the input changes first. The
+  // progressive mesh records collapses by vertex, so it cannot drop the input's normals as simplify()
+  // does: it is built from a copy without them, and the output gets fresh ones. Faces that disagree on
+  // orientation are turned, as simplify() turns them (orient_faces).
   const bool drop_normals = options.recompute_normals && mesh.has_normals();
-  if (drop_normals) {
-    positions_only = mesh;
-    positions_only.attributes.normals.resize(0, 3);
-  }
-  const Mesh& source = drop_normals ? positions_only : mesh;
+  const std::vector<Index> turn = options.orient_faces ? detail::faces_to_turn(mesh) : std::vector<Index>{};
+  Mesh copy;
+  if (drop_normals || !turn.empty()) copy = mesh;
+  if (drop_normals) copy.attributes.normals.resize(0, 3);
+  detail::turn_faces(copy, turn);
+  const Mesh& source = drop_normals || !turn.empty() ? copy : mesh;
 
   ProgressiveOptions po;
   po.simplify = options;
@@ -127,6 +130,7 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   r.mesh = std::move(level->mesh);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   r.vertex_origin = std::move(level->vertex_origin);
+  r.reoriented_faces = static_cast<Index>(turn.size());
   r.faces_in = mesh.num_faces();
   r.vertices_in = mesh.num_vertices();
   r.faces_out = r.mesh.num_faces();
