@@ -136,6 +136,22 @@ TEST(Cli, ConvertChainKeepsCounts) {
   EXPECT_TRUE(back.has_uvs());
 }
 
+TEST(Cli, ConvertOrientTurnsDisagreeingFacesAndSaysHowMany) {
+  test::ScratchDir dir("cli-convert-orient");
+  const Mesh sphere = test::bumpy_sphere(2, 0.02);
+  Mesh shuffled = sphere;
+  Index turned = 0;
+  for (Index f = 1; f < shuffled.num_faces(); f += 3) std::swap(shuffled.triangles(f, 1), shuffled.triangles(f, 2)), ++turned;
+  write_mesh(shuffled, (dir / "s.ply").string());
+  EXPECT_NE(run(dir, "info s.ply").out.find("hint         lodkit convert IN OUT --orient"), std::string::npos);
+  const CliRun r = run(dir, "convert s.ply o.ply --orient");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find(fmt::format("turned {} faces", turned)), std::string::npos) << r.err;
+  EXPECT_EQ(read_mesh((dir / "o.ply").string()).triangles, sphere.triangles);
+  EXPECT_NE(run(dir, "convert o.ply p.ply --orient").err.find("turned 0 faces"), std::string::npos);
+  EXPECT_EQ(run(dir, "info o.ply").out.find("hint"), std::string::npos);
+}
+
 TEST(Cli, StdinAndStdout) {
   test::ScratchDir dir("cli");
   ASSERT_EQ(run(dir, "generate box -o box.off").status, 0);

@@ -1,4 +1,4 @@
-// lodkit convert: one mesh format to another, optionally welded or Draco-quantised.
+// lodkit convert: one mesh format to another, optionally welded, turned to agree on orientation or Draco-quantised.
 #include <lodkit/error.h>
 #include <lodkit/mesh.h>
 
@@ -15,7 +15,7 @@ struct ConvertOptions {
   std::string input, output, output_flag;
   std::optional<std::string> from, to;
   bool weld = false, drop_unreferenced = false, ascii = false, big_endian = false;
-  bool no_normals = false, no_uvs = false, no_colours = false, compute_normals = false;
+  bool no_normals = false, no_uvs = false, no_colours = false, compute_normals = false, orient = false;
   std::optional<int> quantize;
   int compression_level = 7;
 };
@@ -30,6 +30,7 @@ int run_convert(const ConvertOptions& o, const GlobalOptions& global) {
   const Index vertices_in = mesh.num_vertices();
   if (o.weld) weld_identical_vertices(mesh);
   if (o.drop_unreferenced) remove_unreferenced_vertices(mesh);
+  const Index turned = o.orient ? orient_consistently(mesh) : 0;
   if (o.compute_normals) mesh.attributes.normals = compute_vertex_normals(mesh);
 
   WriteOptions w;
@@ -50,6 +51,8 @@ int run_convert(const ConvertOptions& o, const GlobalOptions& global) {
     fmt::print(stderr, "convert: {} -> {}: {} vertices ({} in), {} faces, {:.3f} s\n", o.input, output,
                thousands(mesh.num_vertices()), thousands(vertices_in), thousands(mesh.num_faces()),
                seconds);
+  if (o.orient && !global.quiet)
+    fmt::print(stderr, "convert: turned {} faces to agree with their neighbours' orientation\n", thousands(turned));
   return 0;
 }
 
@@ -66,6 +69,8 @@ Command add_convert_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_option("--to", opt->to, "Output format when writing stdout")->check(format_validator());
   sub->add_flag("--weld", opt->weld, "Merge vertices with identical positions and attributes");
   sub->add_flag("--drop-unreferenced", opt->drop_unreferenced, "Remove vertices no face uses");
+  sub->add_flag("--orient", opt->orient,
+                "Turn faces that disagree with their neighbours' orientation (closed parts end up facing outwards)");
   sub->add_flag("--compute-normals", opt->compute_normals, "Replace normals by area-weighted vertex normals");
   sub->add_flag("--ascii", opt->ascii, "Write ASCII PLY or STL instead of binary");
   sub->add_flag("--big-endian", opt->big_endian, "Write binary big-endian PLY");
@@ -79,6 +84,7 @@ Command add_convert_command(CLI::App& app, const GlobalOptions& global) {
   sub->footer(R"(Examples:
   lodkit convert bunny.obj bunny.ply
   lodkit convert scan.stl scan.ply --weld --drop-unreferenced
+  lodkit convert shuffled.obj fixed.ply --orient
   lodkit convert bunny.ply bunny.drc --quantize 14
   lodkit convert model.obj - --to off | other-tool)");
   return {sub, [opt, &global] { return run_convert(*opt, global); }};

@@ -47,6 +47,9 @@ void print_report(const std::string& input, const MeshReport& r) {
                               "oriented edges, {} degenerate faces, {} duplicate faces",
                               r.non_manifold_edges, r.non_manifold_vertices,
                               r.inconsistently_oriented_edges, r.degenerate_faces, r.duplicate_faces));
+  if (r.inconsistently_oriented_edges > 0)
+    line("hint", "lodkit convert IN OUT --orient turns faces to agree with their neighbours (simplify and pm "
+                 "build do so on their own copy)");
   line("area", fmt::format("{:.9g}", r.area));
   if (r.volume) {
     line("volume", fmt::format("{:.9g}{}", *r.volume, *r.volume < 0 ? " (negative: faces point inward)" : ""));
