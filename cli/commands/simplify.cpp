@@ -391,7 +391,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   "Weight of the planes that keep thin fins, spikes and sharp ridges (quadric; 0 = off)")
       ->check(kNonNegative)->capture_default_str();
   sub->add_option("--attribute-weights", opt->attribute_weights,
-                  "Weights of normal, UV and colour error against geometry, e.g. 0.5,1,1 (quadric; with hoppe they set the merged values only; default off)")
+                  "Weights of normal, UV and colour error against geometry, e.g. 0.5,1,1 (quadric: attribute quadrics; hoppe: E_scalar; default off)")
       ->delimiter(',')->check(kNonNegative);
   sub->add_option("--feature-angle", opt->feature_angle, "schroeder: dihedral angle that makes a feature edge (degrees)")
       ->check(in_range(0.1, 180.0))->capture_default_str();

@@ -6,18 +6,28 @@
 // each point onto its nearest face and (b) the linear least-squares solve for the position given
 // those projections, starting from the quadric-optimal position.
 //
+// With attribute weights, E_scalar joins them (the paper's section 4.2): each point also carries the
+// input's attribute values there (normals, UVs, colours, scaled as the engine's wedges are: weight x the
+// bounding-box diagonal, so that they count as distances), and E_scalar sums their squared differences
+// from the current mesh's values interpolated at the point's projection. A collapse is scored with the
+// merged wedges at their best values given the projections (one small least-squares solve per wedge).
+// Values compare within a chart only (faces joined where no attribute seam parts them): across a UV seam
+// the mesh interpolates another chart's values, so a point whose nearest face lies there counts none.
+//
 // Open boundaries are discontinuity curves in the paper's sense (its E_disc term): points sampled on
 // the input's boundary edges belong to the nearest boundary edge of the current mesh, and a collapse
 // along the boundary adds their squared distances to the edges around the merged vertex. Without that
 // term nothing holds a boundary vertex to the boundary: E_dist only pulls the mesh towards the input
 // points, so a boundary may drift over a hole (the bunny's base at 1 %: Hausdorff 2.8 %).
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <iterator>
 #include <random>
 #include <tbb/enumerable_thread_specific.h>
 
 #include "core/bound_rows.h"
+#include "core/union_find.h"
 #include "core/geometry.h"
 #include "simplify/hoppe_points.h"
 
@@ -60,13 +70,20 @@ class HoppeScorer {
     double d2, b;           ///< squared distance; barycentric weight of the moving corner
     Eigen::Vector3d fixed;  ///< the projection minus b times the moving corner
   };
+  // With E_scalar, per point beside its Nearest (not in it: the plain energy's loop stays as lean): the
+  // star triangle it lies on and the weight there of the corner after the moving one.
+  struct OnTriangle {
+    int tri;
+    double b_next;
+  };
 
  public:
-  HoppeScorer(const FaceSamples& face_samples, const BoundaryCurves& curves)
-      : face_samples_(face_samples), curves_(curves) {}
+  HoppeScorer(const FaceSamples& face_samples, const BoundaryCurves& curves, const FaceValues& face_values,
+              const std::vector<Index>& face_chart)
+      : face_samples_(face_samples), curves_(curves), face_values_(face_values), face_chart_(face_chart) {}
 
-  bool score(const EngineState& s, Index u, Index v, Freedom freedom, bool border_edge, Candidate& out) {
-    gather(s, u, v);
+  bool score(const EngineState& s, const Probe& probe, Index u, Index v, Freedom freedom, bool border_edge, Candidate& out) {
+    gather(s, probe, u, v);
     // A collapse that removes every face around u and v (an isolated triangle) leaves the points no
     // surface to belong to: E is undefined there, so it is no candidate (the link condition refuses it
     // too, but only when it reaches the top of the queue).
@@ -105,7 +122,8 @@ class HoppeScorer {
         tri_.push_back(tri);
       }
       // (Projecting in parallel did not pay: a neighbourhood holds 50-300 points, a few microseconds.)
-      project_all(p, solve);
+      if (attribute_dims_ > 0) project_all<true>(p, true);
+      else project_all<false>(p, solve);
       for (std::size_t j = 0; j < points_.size(); ++j) {
         const Nearest& n = nearest_[j];
         const double weight = weight_[j];
@@ -173,7 +191,7 @@ class HoppeScorer {
       if (freedom == Freedom::Free && solved_energy < e) e = solved_energy, p = solved, e_worst = solved_worst;
     }
     out.position = p;
-    out.cost = e - before;
+    out.cost = e - before + (attribute_dims_ > 0 ? scalar_energy(s) - scalar_before_ : 0.0);
     out.error = std::sqrt(e_worst);  // the farthest sample point from the merged neighbourhood
     return true;
   }
@@ -183,21 +201,28 @@ class HoppeScorer {
   // distance rules out nearly every other one through a cheap lower bound, computed for all triangles
   // at once. A point of a vanishing face has no home: the triangle with the lowest bound goes first.
   // The others left follow in index order, triangle 0 taking the first's place.
+  // With kOnTriangle (E_scalar), also each point's triangle and second weight, into on_triangle_.
+  template <bool kOnTriangle>
   void project_all(const Eigen::Vector3d& p, bool solve) {
     const std::size_t m = tri_.size();
     rows_.resize(m);
     for (std::size_t i = 0; i < m; ++i) rows_.set(i, tri_[i]);
     nearest_.resize(points_.size());
+    if constexpr (kOnTriangle) on_triangle_.resize(points_.size());
     for (std::size_t j = 0; j < points_.size(); ++j) {
       const Eigen::Vector3d& x = points_[j];
       const double* bounds = rows_.lower_bounds2(x);
       const std::size_t first = home_[j] >= 0 ? std::size_t(home_[j]) : rows_.lowest();
       Nearest& out = nearest_[j];
       out = nearest_on(first, x, p, solve);
+      [[maybe_unused]] std::size_t on = first;
       auto try_triangle = [&](std::size_t k) {
         if (bounds[k] >= out.d2) return;
         const Nearest c = nearest_on(k, x, p, solve);
-        if (c.d2 < out.d2) out = c;
+        if (c.d2 < out.d2) {
+          out = c;
+          if constexpr (kOnTriangle) on = k;
+        }
       };
       if (m <= 64) {
         // The bounds below the first's distance as bits (usually none), bit n for the n-th tried.
@@ -209,7 +234,23 @@ class HoppeScorer {
       } else {
         for (std::size_t n = 1; n < m; ++n) try_triangle(n == first ? 0 : n);
       }
+      if constexpr (kOnTriangle) on_triangle_[j] = {static_cast<int>(on), weight_after_moving(on, x, out)};
     }
+  }
+
+  // The weight at x's projection (`n`, on star triangle k) of the corner after the moving one, x being
+  // the point of the last rows_.lower_bounds2().
+  double weight_after_moving(std::size_t k, const Eigen::Vector3d& x, const Nearest& n) const {
+    const Tri& t = tri_[k];
+    const int m = t.moving;
+    if (rows_.inside_prism(k)) {
+      // That corner faces the side from the corner after it to the moving one.
+      const int side = (m + 2) % 3;
+      const double per_distance = (t.c[m] - t.c[side]).norm() * t.per_area;
+      return std::clamp((t.edge_offset[side] - t.edge_normal[side].dot(x)) * per_distance, 0.0, 1.0 - n.b);
+    }
+    const Eigen::Vector3d q = closest_point_on_triangle(x, t.c[0], t.c[1], t.c[2]);
+    return std::clamp((t.c[(m + 2) % 3] - q).cross(t.c[m] - q).dot(t.normal) * t.per_area, 0.0, 1.0 - n.b);
   }
 
   // The nearest point to x on star triangle k, x being the point of the last rows_.lower_bounds2().
@@ -245,11 +286,53 @@ class HoppeScorer {
     return out;
   }
 
+  // E_scalar after the collapse, each merged wedge at its best value given the points' projections
+  // (nearest_): over the points on triangles whose moving corner is wedge w, the value a minimising
+  // sum weight |y - b a|^2, y being the point's values less the fixed corners' share.
+  double scalar_energy(const EngineState& s) {
+    const std::size_t k = static_cast<std::size_t>(attribute_dims_);
+    for (auto& m : merged_) m.sum_b2 = 0, m.sum_y2 = 0, m.sum_by.fill(0.0);
+    for (std::size_t j = 0; j < points_.size(); ++j) {
+      const Nearest& n = nearest_[j];
+      const auto [tri, b_next] = on_triangle_[j];
+      if (star_chart_[std::size_t(tri)] != point_chart_[j]) continue;  // across a seam: not comparable
+      const Tri& t = tri_[std::size_t(tri)];
+      const auto& w = star_wedges_[std::size_t(tri)];
+      const double* next = &s.wedge_value[k * std::size_t(w[(t.moving + 1) % 3])];
+      const double* last = &s.wedge_value[k * std::size_t(w[(t.moving + 2) % 3])];
+      const double b_last = std::max(0.0, 1.0 - n.b - b_next), weight = weight_[j];
+      Merged& m = merged_[std::size_t(star_slot_[std::size_t(tri)])];
+      const double* x = &values_[k * j];
+      m.sum_b2 += weight * n.b * n.b;
+      for (std::size_t d = 0; d < k; ++d) {
+        const double y = x[d] - b_next * next[d] - b_last * last[d];
+        m.sum_by[d] += weight * n.b * y;
+        m.sum_y2 += weight * y * y;
+      }
+    }
+    double e = 0;
+    for (const Merged& m : merged_) {
+      double explained = 0;
+      if (m.sum_b2 > 0)
+        for (std::size_t d = 0; d < k; ++d) explained += m.sum_by[d] * m.sum_by[d] / m.sum_b2;
+      e += std::max(0.0, m.sum_y2 - explained);
+    }
+    return e;
+  }
+
  private:
   // Collects the neighbourhood of u -> v: its points, the new star (corner -1 = the merged vertex),
   // and the rings of u, v and the merged vertex.
-  void gather(const EngineState& s, Index u, Index v) {
+  void gather(const EngineState& s, const Probe& probe, Index u, Index v) {
     points_.clear();
+    values_.clear();
+    point_chart_.clear();
+    star_chart_.clear();
+    star_wedges_.clear();
+    star_slot_.clear();
+    merged_.clear();
+    scalar_before_ = 0;
+    const std::size_t dims = static_cast<std::size_t>(attribute_dims_);
     dist2_.clear();
     weight_.clear();
     home_.clear();
@@ -280,21 +363,51 @@ class HoppeScorer {
           dist2_.push_back(fp[i].dist2);
           weight_.push_back(double(stride ? stride : 1));
           home_.push_back(home);
+          if (dims > 0) {
+            const double* x = &face_values_[f][(dims + 2) * i];
+            values_.insert(values_.end(), x, x + dims);
+            point_chart_.push_back(static_cast<Index>(x[dims + 1]));
+            scalar_before_ += weight_.back() * x[dims];
+          }
         }
         for (int k = 0; k < 3; ++k)
           if (const Index q = s.corner_point(f, k); q != p) insert_sorted(p == u ? ring_u_ : ring_v_, q);
         if (has_u && has_v) continue;  // vanishes
         std::array<Index, 3> t;
-        for (int k = 0; k < 3; ++k) {
-          const Index q = s.corner_point(f, k);
-          t[k] = q == u || q == v ? -1 : q;
+        for (int c = 0; c < 3; ++c) {
+          const Index q = s.corner_point(f, c);
+          t[c] = q == u || q == v ? -1 : q;
         }
         star_.push_back(t);
+        if (dims > 0) add_star_wedges(s, probe, f, u);
       }
     // The merged vertex's ring: both rings but u and v (u is in neither: faces at v that have u
     // were taken from u's side).
     std::set_union(ring_u_.begin(), ring_u_.end(), ring_v_.begin(), ring_v_.end(), std::back_inserter(ring_));
     ring_.erase(std::remove(ring_.begin(), ring_.end(), v), ring_.end());
+  }
+
+  // The wedges at the corners of star triangle f, the moving corner's being the one it merges into
+  // (u's wedges through the probe's map), and that wedge's place in merged_.
+  void add_star_wedges(const EngineState& s, const Probe& probe, Index f, Index u) {
+    std::array<Index, 3> w;
+    int moving = 0;
+    for (int c = 0; c < 3; ++c) {
+      w[c] = s.face[f][c];
+      const Index q = s.corner_point(f, c);
+      if (star_.back()[c] >= 0) continue;
+      moving = c;
+      if (q == u)
+        for (int i = 0; i < probe.wedge_map_size; ++i)
+          if (probe.wedge_map[i].first == w[c]) w[c] = probe.wedge_map[i].second;
+    }
+    std::size_t slot = 0;
+    while (slot < merged_.size() && merged_[slot].wedge != w[moving]) ++slot;
+    if (slot == merged_.size()) merged_.push_back({w[moving], 0, 0, {}});
+
+    star_wedges_.push_back(w);
+    star_slot_.push_back(static_cast<int>(slot));
+    star_chart_.push_back(face_chart_[f]);
   }
 
   // Adds q to the ascending list r unless it is there (rings hold a dozen points: cheaper than sorting).
@@ -331,6 +444,9 @@ class HoppeScorer {
 
   const FaceSamples& face_samples_;
   const BoundaryCurves& curves_;
+  const FaceValues& face_values_;
+  const std::vector<Index>& face_chart_;
+  int attribute_dims_ = 0;  ///< E_scalar's values per point (0: no E_scalar)
   // Scratch for one candidate.
   std::vector<Index> curve_points_, curve_ends_, scratch_;
   static constexpr std::size_t kPointsPerFace = 16;
@@ -352,6 +468,23 @@ class HoppeScorer {
   };
   std::vector<Projection> curve_projections_;
   Index faces_ = 0;
+  // E_scalar's scratch: the points' values (k per point of points_), the star triangles' wedges and
+  // which merged wedge each one's moving corner is, and per merged wedge the sums of its solve.
+  std::vector<double> values_;
+  std::vector<Index> point_chart_, star_chart_;  ///< the chart of each point of points_, of each star triangle
+  std::vector<OnTriangle> on_triangle_;  ///< per point of points_
+  std::vector<std::array<Index, 3>> star_wedges_;
+  std::vector<int> star_slot_;
+  struct Merged {
+    Index wedge;
+    double sum_b2, sum_y2;
+    std::array<double, kMostAttributeDims> sum_by;
+  };
+  std::vector<Merged> merged_;
+  double scalar_before_ = 0;
+
+ public:
+  void set_attribute_dims(int k) { attribute_dims_ = k; }
 };
 
 class HoppeCost final : public CostModel {
@@ -372,13 +505,15 @@ class HoppeCost final : public CostModel {
     std::mt19937_64 rng(o.seed);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     face_samples_.resize(s.face.size());
+    dims_ = s.attribute_quadrics.dims();
+    if (dims_ > 0) face_values_.resize(s.face.size()), find_charts(s);
     std::vector<char> placed(s.position.size(), 0);
     double carry = 0;
     for (std::size_t f = 0; f < s.face.size(); ++f) {
       if (s.face_dead[f]) continue;
       for (int k = 0; k < 3; ++k) {
         const Index p = s.corner_point(Index(f), k);
-        if (!placed[p]) placed[p] = 1, add_point(s.position[p], Index(f));
+        if (!placed[p]) placed[p] = 1, add_point(s, s.position[p], Index(f), Eigen::Vector3d::Unit(k));
       }
       carry += per_area > 0 ? on_every_face + per_area * face_area(s, f) : per_face;
       for (; carry >= 1.0; carry -= 1.0) {
@@ -387,7 +522,7 @@ class HoppeCost final : public CostModel {
         const Eigen::Vector3d p0 = m.positions.row(s.face[f][0]).transpose() - s.origin,
                               p1 = m.positions.row(s.face[f][1]).transpose() - s.origin,
                               p2 = m.positions.row(s.face[f][2]).transpose() - s.origin;
-        add_point(p0 + a * (p1 - p0) + b * (p2 - p0), Index(f));
+        add_point(s, p0 + a * (p1 - p0) + b * (p2 - p0), Index(f), {1 - a - b, a, b});
       }
     }
     sample_boundary(s);
@@ -424,7 +559,12 @@ class HoppeCost final : public CostModel {
     for (const auto& [f, k] : s.sharp_edges) {
       const Eigen::Vector3d pa = s.position[s.corner_point(f, k)], pb = s.position[s.corner_point(f, (k + 1) % 3)];
       const int points = std::max(1, static_cast<int>(std::min((pb - pa).norm() / spacing, double(kMostPerEdge))));
-      for (int i = 1; i <= points; ++i) add_point(pa + (pb - pa) * (double(i) / (points + 1)), f);
+      for (int i = 1; i <= points; ++i) {
+        const double t = double(i) / (points + 1);
+        Eigen::Vector3d weights = Eigen::Vector3d::Zero();
+        weights[k] = 1 - t, weights[(k + 1) % 3] = t;
+        add_point(s, pa + (pb - pa) * t, f, weights);
+      }
     }
   }
 
@@ -446,7 +586,7 @@ class HoppeCost final : public CostModel {
   bool costly() const override { return true; }
 
   bool score(const EngineState& s, const Probe& probe, Index u, Index v, Freedom freedom, Candidate& out) override {
-    return scorers_.local().score(s, u, v, freedom, probe.shared.size() == 1, out);
+    return scorers_.local().score(s, probe, u, v, freedom, probe.shared.size() == 1, out);
   }
 
   void collapsed(EngineState& s, Index u, Index v, const std::vector<Index>& removed_faces) override {
@@ -454,18 +594,26 @@ class HoppeCost final : public CostModel {
     // Each point with the index in `around` of the face it had (none for a vanished face's points).
     const std::vector<Index>& around = s.faces_of(v);
     const std::size_t none = around.size();
-    auto& [moving, home_of, rows] = reassign_scratch_.local();
-    moving.clear(), home_of.clear();
+    auto& [moving, values, home_of, rows] = reassign_scratch_.local();
+    moving.clear(), values.clear(), home_of.clear();
+    auto take_values = [&](Index f) {  // with E_scalar, the values go along
+      if (dims_ == 0) return;
+      values.insert(values.end(), face_values_[f].begin(), face_values_[f].end());
+      face_values_[f].clear();
+    };
     for (Index f : removed_faces) {
       moving.insert(moving.end(), face_samples_[f].begin(), face_samples_[f].end());
       home_of.resize(moving.size(), none);
       std::vector<Sample>().swap(face_samples_[f]);  // gone for good: free it
+      take_values(f);
+      if (dims_ > 0) std::vector<double>().swap(face_values_[f]);
     }
     for (std::size_t i = 0; i < around.size(); ++i) {
       auto& list = face_samples_[around[i]];
       moving.insert(moving.end(), list.begin(), list.end());
       home_of.resize(moving.size(), i);
       list.clear();
+      take_values(around[i]);
     }
     // Each point goes to its nearest face, the first in `around` on a tie (a vertex's point is on
     // every face at that vertex). The face it had, if any, is measured first; a face whose lower bound
@@ -502,6 +650,17 @@ class HoppeCost final : public CostModel {
       }
       sample.dist2 = best;
       face_samples_[best_face].push_back(sample);
+      if (dims_ > 0) {
+        // Every face here has v at a corner, whose wedges took new values: measure every point again.
+        const std::size_t k = static_cast<std::size_t>(dims_);
+        const double* x = &values[(k + 2) * j];
+        auto& list = face_values_[best_face];
+        list.insert(list.end(), x, x + k);
+        // Across a seam the faces interpolate another chart's values: nothing to compare there.
+        const bool same_chart = face_chart_[best_face] == static_cast<Index>(x[k + 1]);
+        list.push_back(same_chart ? scalar_distance2(s, sample.x, x, best_face) : 0.0);
+        list.push_back(x[k + 1]);
+      }
     }
     if (removed_faces.size() == 1 && s.has(v, kBorder) && !curves_.point.empty()) reassign_boundary(s, u, v);
   }
@@ -531,26 +690,85 @@ class HoppeCost final : public CostModel {
     }
   }
 
-  std::optional<double> fit(EngineState& s, int pass) override { return fit_points(s, face_samples_, curves_, pass > 0); }
+  // (With E_scalar the points stay on their faces: their values are kept beside them, face by face.)
+  std::optional<double> fit(EngineState& s, int pass) override {
+    return fit_points(s, face_samples_, curves_, pass > 0 && dims_ == 0);
+  }
   double fit_measure(const EngineState& s) override { return points_energy(s, face_samples_, curves_); }
 
  private:
-  void add_point(const Eigen::Vector3d& p, Index face) {
+  // A point on `face` at barycentric `weights`; with E_scalar, the input's values there too.
+  void add_point(const EngineState& s, const Eigen::Vector3d& p, Index face, const Eigen::Vector3d& weights) {
     face_samples_[face].push_back({p, 0.0});
+    if (dims_ == 0) return;
+    const std::size_t k = static_cast<std::size_t>(dims_);
+    auto& list = face_values_[face];
+    const std::size_t at = list.size();
+    list.resize(at + k + 2, 0.0);
+    for (int c = 0; c < 3; ++c)
+      for (std::size_t d = 0; d < k; ++d) list[at + d] += weights[c] * s.wedge_value[k * std::size_t(s.face[face][c]) + d];
+    list[at + k + 1] = static_cast<double>(face_chart_[face]);
+  }
+
+  // With E_scalar: per face, its chart, the faces joined across edges whose two faces share both
+  // wedges (no attribute seam between them). A face keeps its chart: wedges merge within one.
+  void find_charts(const EngineState& s) {
+    UnionFind charts(s.face.size());
+    std::unordered_map<std::uint64_t, std::pair<Index, int>> first_use;  // edge -> face and side
+    for (std::size_t f = 0; f < s.face.size(); ++f) {
+      if (s.face_dead[f]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Index a = s.corner_point(Index(f), k), b = s.corner_point(Index(f), (k + 1) % 3);
+        const auto [it, fresh] = first_use.try_emplace(BoundaryCurves::edge_key(a, b), Index(f), k);
+        if (fresh) continue;
+        const auto [g, side] = it->second;
+        // The same edge, run the other way in a consistent mesh: same wedges at the same points.
+        const Index wa = s.face[f][k], wb = s.face[f][(k + 1) % 3];
+        const Index ga = s.face[g][side], gb = s.face[g][(side + 1) % 3];
+        const bool same = (s.corner_point(g, side) == a) ? (ga == wa && gb == wb) : (ga == wb && gb == wa);
+        if (same) charts.unite(int(f), int(g));
+      }
+    }
+    face_chart_.resize(s.face.size());
+    for (std::size_t f = 0; f < s.face.size(); ++f) face_chart_[f] = charts.find(int(f));
+  }
+
+  // With E_scalar: the squared distance from a point's values to those the mesh interpolates at the
+  // point's projection onto `face`.
+  double scalar_distance2(const EngineState& s, const Eigen::Vector3d& x, const double* values, Index face) const {
+    const Eigen::Vector3d a = s.position[s.corner_point(face, 0)], b = s.position[s.corner_point(face, 1)],
+                          c = s.position[s.corner_point(face, 2)];
+    const Eigen::Vector3d weights = barycentric(a, b, c, closest_point_on_triangle(x, a, b, c));
+    const std::size_t k = static_cast<std::size_t>(dims_);
+    double d2 = 0;
+    for (std::size_t d = 0; d < k; ++d) {
+      double at = 0;
+      for (int corner = 0; corner < 3; ++corner) at += weights[corner] * s.wedge_value[k * std::size_t(s.face[face][corner]) + d];
+      d2 += (values[d] - at) * (values[d] - at);
+    }
+    return d2;
   }
 
   FaceSamples face_samples_;
+  FaceValues face_values_;  ///< with E_scalar (attribute weights), else empty; k + 2 numbers per point: its
+                            ///< values, their squared distance to the mesh's, and the point's chart
+  std::vector<Index> face_chart_;  ///< with E_scalar: per face, its chart
+  int dims_ = 0;            ///< attribute values per point (0: no E_scalar)
   // Scratch of collapsed(), per thread (lanes collapse side by side).
   struct ReassignScratch {
     std::vector<Sample> moving;
+    std::vector<double> values;  ///< with E_scalar: dims_ + 1 per point of moving
     std::vector<std::size_t> home_of;  ///< per point of moving: its face's index in faces_of(v)
     BoundRows rows;
   };
   tbb::enumerable_thread_specific<ReassignScratch> reassign_scratch_;
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
   BoundaryCurves curves_;
-  tbb::enumerable_thread_specific<HoppeScorer> scorers_{
-      [this] { return HoppeScorer(face_samples_, curves_); }};
+  tbb::enumerable_thread_specific<HoppeScorer> scorers_{[this] {
+    HoppeScorer scorer(face_samples_, curves_, face_values_, face_chart_);
+    scorer.set_attribute_dims(dims_);
+    return scorer;
+  }};
 };
 
 }  // namespace

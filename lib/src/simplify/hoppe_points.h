@@ -23,6 +23,16 @@ struct Sample {
 /// Per face of the engine (dead ones empty): the points that belong to it.
 using FaceSamples = std::vector<std::vector<Sample>>;
 
+/// With E_scalar (attribute weights): per face, for each of its points in FaceSamples' order, the input's
+/// k attribute values at the point (scaled as EngineState::wedge_value) and then the squared distance
+/// from those to the current mesh's values at the point's projection (0 where that lies across an
+/// attribute seam), and the point's chart: k + 2 numbers per point. (Apart from Sample, so that runs
+/// without attributes read no more per point.)
+using FaceValues = std::vector<std::vector<double>>;
+
+/// Normals, UVs and colours: the most attribute values a wedge has.
+constexpr std::size_t kMostAttributeDims = 3 + 2 + 4;
+
 /// The points sampled on the input's boundary, each belonging to one boundary edge of the current mesh.
 /// Lanes (slabs simplified side by side) look up and change the edges at their own points only, but
 /// in one map: its lookups and changes take the lock. (A list found stays where it is: the map's
