@@ -27,8 +27,8 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "core/bound_rows.h"
-#include "core/union_find.h"
 #include "core/geometry.h"
+#include "core/union_find.h"
 #include "simplify/hoppe_points.h"
 
 namespace lodkit::detail {
