@@ -211,6 +211,28 @@ TEST(CliSimplify, EveryMethodEndToEndWithJsonAndMeasure) {
   EXPECT_NE(compared.out.find("Hausdorff"), std::string::npos);
 }
 
+TEST(CliCompare, ColoursAreReportedWhenBothMeshesHaveThem) {
+  test::ScratchDir dir("cli-compare-colours");
+  Mesh a = make_icosphere({.subdivisions = 2});
+  a.attributes.colours = Colours::Constant(a.num_vertices(), 4, 0.5f);
+  Mesh b = a;
+  b.attributes.colours.col(1).array() += 0.25f;
+  write_mesh(a, (dir / "a.ply").string());
+  write_mesh(b, (dir / "b.ply").string());
+  CliRun r = run(dir, "compare a.ply b.ply --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["colour_rms"].get<double>(), 0.25, 1e-6);
+  EXPECT_NEAR(j["b_to_a"]["colour_max"].get<double>(), 0.25, 1e-6);
+  r = run(dir, "compare a.ply b.ply");
+  EXPECT_NE(r.out.find("colour deviation"), std::string::npos) << r.out;
+  r = run(dir, "simplify b.ply -o s.ply --ratio 0.5 --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["measured"].contains("colour_rms")) << r.out;
+  write_mesh(make_icosphere({.subdivisions = 2}), (dir / "plain.ply").string());
+  EXPECT_FALSE(nlohmann::json::parse(run(dir, "compare a.ply plain.ply --json").out).contains("colour_rms"));
+}
+
 TEST(CliCompare, WithinDecidesAndExitsByTheAnswer) {
   // --within E against the full comparison: just above its certified bound, proved within (exit 0);
   // just below the distance it attained, a point farther is named (exit 3).

@@ -22,6 +22,27 @@ TEST(Compare, IdenticalMeshesAreZeroApart) {
   EXPECT_GE(c.a_to_b.samples, 10 * m.num_faces());
 }
 
+TEST(Compare, ColoursAreComparedWhereBothMeshesHaveThem) {
+  // The same sphere with every red raised by 0.1 (and its colours a gradient, so that interpolation
+  // matters): 0.1 apart everywhere, both ways; no colours on one side, no colour figures.
+  Mesh a = make_icosphere({.subdivisions = 2});
+  a.attributes.colours.resize(a.num_vertices(), 4);
+  for (Index v = 0; v < a.num_vertices(); ++v)
+    a.attributes.colours.row(v) << 0.5f + 0.4f * float(a.positions(v, 0)), 0.5f, 0.2f, 1.0f;
+  Mesh b = a;
+  b.attributes.colours.col(0).array() += 0.1f;
+  const Comparison c = compare(a, b);
+  ASSERT_TRUE(c.colour_rms && c.a_to_b.colour_rms && c.b_to_a.colour_max);
+  EXPECT_NEAR(*c.colour_rms, 0.1, 1e-6);
+  EXPECT_NEAR(*c.a_to_b.colour_max, 0.1, 1e-6);
+  EXPECT_NEAR(*c.b_to_a.colour_rms, 0.1, 1e-6);
+  EXPECT_NEAR(*compare(a, a).colour_rms, 0.0, 1e-12);
+  Mesh plain = a;
+  plain.attributes.colours.resize(0, 4);
+  EXPECT_FALSE(compare(a, plain).colour_rms);
+  EXPECT_FALSE(compare(plain, a).a_to_b.colour_max);
+}
+
 TEST(Compare, PlaneAndDisplacedPlane) {
   const Mesh a = make_grid({.size = {2, 1}, .divisions_x = 8, .divisions_y = 4});
   Mesh b = a;

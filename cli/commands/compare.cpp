@@ -48,19 +48,21 @@ int run_within(const CompareCliOptions& opt, const Mesh& a, const Mesh& b) {
 }
 
 nlohmann::json directed_json(const DirectedDistance& d, const Comparison& c) {
-  return {{"max", d.max}, {"max_percent", c.percent(d.max)}, {"max_bound", d.max_bound},
+  nlohmann::json j{{"max", d.max}, {"max_percent", c.percent(d.max)}, {"max_bound", d.max_bound},
           {"max_bound_percent", c.percent(d.max_bound)}, {"max_queries", d.max_queries},
           {"max_at", {d.max_at.x(), d.max_at.y(), d.max_at.z()}},
           {"max_nearest", {d.max_nearest.x(), d.max_nearest.y(), d.max_nearest.z()}}, {"mean", d.mean}, {"mean_percent", c.percent(d.mean)},
           {"rms", d.rms}, {"rms_percent", c.percent(d.rms)}, {"normal_deviation_mean_deg", d.normal_deviation_mean_deg},
           {"normal_deviation_max_deg", d.normal_deviation_max_deg}, {"samples", d.samples}};
+  if (d.colour_rms) j["colour_rms"] = *d.colour_rms, j["colour_max"] = *d.colour_max;
+  return j;
 }
 
 }  // namespace
 
 Command add_compare_command(CLI::App& app, const GlobalOptions&) {
   auto opt = std::make_shared<CompareCliOptions>();
-  CLI::App* sub = app.add_subcommand("compare", "Distance between two surfaces (Hausdorff, mean, RMS, normals)");
+  CLI::App* sub = app.add_subcommand("compare", "Distance between two surfaces (Hausdorff, mean, RMS, normals, colours)");
   sub->add_option("a", opt->a, "First mesh (percentages refer to its bounding-box diagonal)")->required();
   sub->add_option("b", opt->b, "Second mesh")->required();
   sub->add_option("--samples", opt->samples, "Face samples per direction (default 10 per face of the larger mesh)")
@@ -90,6 +92,7 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
                                {"hausdorff_bound_percent", c.percent(c.hausdorff_bound)}, {"mean", c.mean}, {"mean_percent", c.percent(c.mean)},
                                {"rms", c.rms}, {"rms_percent", c.percent(c.rms)},
                                {"a_to_b", directed_json(c.a_to_b, c)}, {"b_to_a", directed_json(c.b_to_a, c)}};
+              if (c.colour_rms) j["colour_rms"] = *c.colour_rms;
               fmt::print("{}\n", j.dump(2));
               return 0;
             }
@@ -109,6 +112,9 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
             row("RMS", c.rms);
             fmt::print("{:<22} {:>14.3f} deg (mean), {:.1f} deg (max)\n", "normal deviation A->B",
                        c.a_to_b.normal_deviation_mean_deg, c.a_to_b.normal_deviation_max_deg);
+            if (c.colour_rms)
+              fmt::print("{:<22} {:>14.6g} (RMS), A->B {:.6g}, B->A {:.6g} (max)\n", "colour deviation", *c.colour_rms,
+                         *c.a_to_b.colour_max, *c.b_to_a.colour_max);
             fmt::print("{:<22} {:>14} ({} + {})\n", "samples", thousands(c.a_to_b.samples + c.b_to_a.samples),
                        thousands(c.a_to_b.samples), thousands(c.b_to_a.samples));
             fmt::print("{:<22} {:>14.6g}\n", "diagonal of A", c.diagonal);

@@ -41,6 +41,10 @@ struct DirectedDistance {
   double rms = 0.0;   ///< area-weighted root mean square distance
   double normal_deviation_mean_deg = 0.0;  ///< angle between the two surfaces' face normals
   double normal_deviation_max_deg = 0.0;
+  /// When both meshes have vertex colours: the colour each surface interpolates at a sample and at its
+  /// closest point, compared (Euclidean over red, green, blue and alpha; 0..1 per channel), area-weighted
+  /// over the face samples like `rms`, and the largest over all samples.
+  std::optional<double> colour_rms{}, colour_max{};
   long long samples = 0;
 };
 
@@ -52,6 +56,8 @@ struct Comparison {
   double mean = 0.0;        ///< average of the two means
   double rms = 0.0;         ///< sqrt of the average of the two mean squares
   double diagonal = 0.0;    ///< bounding-box diagonal of A: the reference for percentages
+  /// Both directions' colour_rms combined as `rms` is (when both meshes have vertex colours).
+  std::optional<double> colour_rms{};
   /// The direction whose maximum is the Hausdorff distance (A -> B on a tie): its max_at is where to look.
   const DirectedDistance& farther() const { return a_to_b.max >= b_to_a.max ? a_to_b : b_to_a; }
   double percent(double value) const { return diagonal > 0 ? 100.0 * value / diagonal : 0.0; }

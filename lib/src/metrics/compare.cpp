@@ -11,6 +11,7 @@
 #include <tbb/parallel_invoke.h>
 #include <vector>
 
+#include "core/geometry.h"
 #include "metrics/aabb_tree.h"
 #include "metrics/max_distance_bound.h"
 
@@ -126,12 +127,22 @@ SampleSet sample_surface(const Mesh& m, long long face_samples) {
 struct Measured {
   double distance, angle_deg;
   Index nearest;  // the face of the other mesh nearest the point
+  double colour;  // the colour difference there (both meshes coloured), else 0
 };
+
+// The vertex colour mesh m interpolates at point p of face f.
+Eigen::Vector4d colour_at(const Mesh& m, Index f, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d w = detail::barycentric(corner(m, f, 0), corner(m, f, 1), corner(m, f, 2), p);
+  Eigen::Vector4d c = Eigen::Vector4d::Zero();
+  for (int k = 0; k < 3; ++k) c += w[k] * m.attributes.colours.row(m.triangles(f, k)).transpose().cast<double>();
+  return c;
+}
 
 // Each distinct point's distance to `to`, and the angle between its face's normal and the normal of
 // the face it is closest to.
 std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh& to, const detail::AabbTree& tree) {
   std::vector<Measured> result(set.points.size());
+  const bool colours = from.has_colours() && to.has_colours();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.points.size(), 1024), [&](const auto& range) {
     Index hint = -1;
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -139,8 +150,10 @@ std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh
       hint = hit.face;
       const Eigen::Vector3d n0 = face_normal(from, set.points[i].face), n1 = face_normal(to, hit.face);
       // atan2 keeps small angles accurate where acos(dot) would lose them.
+      const double colour =
+          colours ? (colour_at(from, set.points[i].face, set.points[i].position) - colour_at(to, hit.face, hit.point)).norm() : 0.0;
       result[i] = {std::sqrt(hit.squared_distance), std::atan2(n0.cross(n1).norm(), n0.dot(n1)) * 180.0 / std::numbers::pi,
-                   hit.face};
+                   hit.face, colour};
     }
   });
   return result;
@@ -150,7 +163,7 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
                           std::span<const std::array<Index, 3>> to_neighbours, const CompareOptions& o) {
   const std::vector<Measured> measured = measure(sampled, from, to, tree);
   DirectedDistance d;
-  double weight = 0, sum = 0, sum2 = 0, angle_sum = 0;
+  double weight = 0, sum = 0, sum2 = 0, angle_sum = 0, colour2 = 0, colour_max = 0;
   std::uint32_t farthest = 0;
   for (const SampleSet::Sample& s : sampled.samples) {
     const Measured& m = measured[s.point];
@@ -162,11 +175,17 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
     sum += w * m.distance;
     sum2 += w * m.distance * m.distance;
     angle_sum += w * m.angle_deg;
+    colour2 += w * m.colour * m.colour;
+    colour_max = std::max(colour_max, m.colour);
   }
   if (weight > 0) {
     d.mean = sum / weight;
     d.rms = std::sqrt(sum2 / weight);
     d.normal_deviation_mean_deg = angle_sum / weight;
+  }
+  if (from.has_colours() && to.has_colours()) {
+    d.colour_rms = weight > 0 ? std::sqrt(colour2 / weight) : 0.0;
+    d.colour_max = colour_max;
   }
   d.samples = static_cast<long long>(sampled.samples.size());
 
@@ -197,6 +216,8 @@ Comparison combine(const Mesh& a, DirectedDistance a_to_b, DirectedDistance b_to
   c.hausdorff_bound = std::max(c.a_to_b.max_bound, c.b_to_a.max_bound);
   c.mean = 0.5 * (c.a_to_b.mean + c.b_to_a.mean);
   c.rms = std::sqrt(0.5 * (c.a_to_b.rms * c.a_to_b.rms + c.b_to_a.rms * c.b_to_a.rms));
+  if (c.a_to_b.colour_rms && c.b_to_a.colour_rms)
+    c.colour_rms = std::sqrt(0.5 * (*c.a_to_b.colour_rms * *c.a_to_b.colour_rms + *c.b_to_a.colour_rms * *c.b_to_a.colour_rms));
   const auto box = bounding_box(a);
   c.diagonal = box.isEmpty() ? 0.0 : box.diagonal().norm();
   return c;
