@@ -99,27 +99,33 @@ TEST(ProgressiveMesh, LevelsEqualSimplifyToTheSameFaceCount) {
 }
 
 TEST(ProgressiveMesh, LevelsEqualSimplifyWithAttributeAwareCosts) {
-  ProgressiveOptions o;
-  o.simplify.attribute_weights.uvs = 1.0;
-  o.simplify.attribute_weights.normals = 0.5;
-  const Mesh input = seamed_sphere();
-  const ProgressiveMesh pm = build_progressive_mesh(input, o);
-  EXPECT_FALSE(pm.attribute_changes.empty());
-  for (Index level : {Index(0), pm.max_level() / 3}) {
-    SimplifyOptions so = o.simplify;
-    so.refit_passes = 0;
-    so.target_faces = pm.num_faces(level);
-    const SimplifyResult r = simplify(input, so);
-    const Mesh m = extract_level(pm, level).mesh;
-    ASSERT_EQ(m.num_vertices(), r.mesh.num_vertices());
-    EXPECT_TRUE(m.triangles == r.mesh.triangles);
-    EXPECT_TRUE(m.positions == r.mesh.positions);
-    // Wedges the cost never touched keep their input values here and come back rescaled from
-    // simplify(): equal to rounding.
-    EXPECT_LT((m.attributes.uvs - r.mesh.attributes.uvs).cwiseAbs().maxCoeff(), 1e-12);
-    EXPECT_LT((m.attributes.normals - r.mesh.attributes.normals).cwiseAbs().maxCoeff(), 1e-12);
+  // quadric's attribute quadrics, and hoppe's E_scalar, whose collapses place the values themselves.
+  for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe}) {
+    SCOPED_TRACE(to_string(method));
+    ProgressiveOptions o;
+    o.simplify.method = method;
+    o.simplify.attribute_weights.uvs = method == SimplifyMethod::Hoppe ? 0.1 : 1.0;
+    o.simplify.attribute_weights.normals = method == SimplifyMethod::Hoppe ? 0.05 : 0.5;
+    const Mesh input = seamed_sphere();
+    const ProgressiveMesh pm = build_progressive_mesh(input, o);
+    EXPECT_FALSE(pm.attribute_changes.empty());
+    for (Index level : {Index(0), pm.max_level() / 3}) {
+      SimplifyOptions so = o.simplify;
+      so.refit_passes = 0;
+      so.hoppe_fit_passes = 0;
+      so.target_faces = pm.num_faces(level);
+      const SimplifyResult r = simplify(input, so);
+      const Mesh m = extract_level(pm, level).mesh;
+      ASSERT_EQ(m.num_vertices(), r.mesh.num_vertices());
+      EXPECT_TRUE(m.triangles == r.mesh.triangles);
+      EXPECT_TRUE(m.positions == r.mesh.positions);
+      // Wedges the cost never touched keep their input values here and come back rescaled from
+      // simplify(): equal to rounding.
+      EXPECT_LT((m.attributes.uvs - r.mesh.attributes.uvs).cwiseAbs().maxCoeff(), 1e-12);
+      EXPECT_LT((m.attributes.normals - r.mesh.attributes.normals).cwiseAbs().maxCoeff(), 1e-12);
+    }
+    expect_identical(extract_level(pm, pm.max_level()).mesh, input, "finest level");
   }
-  expect_identical(extract_level(pm, pm.max_level()).mesh, input, "finest level");
 }
 
 TEST(ProgressiveMesh, AProvedLevelIsWithinItsLimitAndNoFinerThanSelection) {

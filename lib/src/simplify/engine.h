@@ -100,8 +100,12 @@ class CostModel {
   /// Scores collapse u -> v, whose checks filled `probe`. Fills `out`; returns false if the cost
   /// refuses the collapse. Called from several threads at once for different candidates.
   virtual bool score(const EngineState& s, const Probe& probe, Index u, Index v, Freedom freedom, Candidate& out) = 0;
-  /// Called after u -> v was performed; `removed_faces` are the faces that vanished.
-  virtual void collapsed(EngineState&, Index /*u*/, Index /*v*/, const std::vector<Index>& /*removed_faces*/) {}
+  /// Called after u -> v was performed (faces and position; attribute values next); probe.shared are the
+  /// faces that vanished, probe.wedge_map the wedges that merged.
+  virtual void collapsed(EngineState&, Index /*u*/, Index /*v*/, const Probe& /*probe*/) {}
+  /// True if collapsed() sets the merged wedges' attribute values itself (EngineState::wedge_value of the
+  /// probe's wedge map), where the engine would take the attribute quadrics' best ones.
+  virtual bool places_attributes() const { return false; }
   /// True if a collapse changes the costs of edges around v's neighbours too (not just v's edges):
   /// those are then re-scored lazily, when they reach the top of the queue.
   virtual bool wide_update() const { return false; }

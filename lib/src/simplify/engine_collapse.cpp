@@ -48,21 +48,6 @@ void Engine::collapse(Lane& lane, Index u, Index v, const Candidate& c) {
     }
     s_.point_faces[v].push_back(f);
   }
-  if (s_.attribute_quadrics.enabled()) {
-    // The kept wedges take the attribute values that minimise the merged attribute error.
-    const std::size_t k = static_cast<std::size_t>(s_.attribute_quadrics.dims());
-    const std::size_t layout = static_cast<std::size_t>(attribute_values_per_vertex(*s_.input));
-    for (int i = 0; i < probe.wedge_map_size; ++i) {
-      const auto [wu, wv] = probe.wedge_map[i];
-      s_.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), c.position, &s_.wedge_value[k * wv]);
-      s_.attribute_quadrics.merge(std::size_t(wv), std::size_t(wu));
-      if (rec) {
-        rec->attribute_vertices.push_back(wv);
-        rec->attributes_after.resize(rec->attributes_after.size() + layout);
-        output_attributes(wv, &rec->attributes_after[rec->attributes_after.size() - layout]);
-      }
-    }
-  }
   lane.stale_estimate += s_.point_faces[u].size() + s_.point_faces[v].size();
   s_.point_faces[u].clear();
   if (!scored_.empty()) std::vector<Scored>().swap(scored_[u]);  // u is gone
@@ -73,7 +58,24 @@ void Engine::collapse(Lane& lane, Index u, Index v, const Candidate& c) {
   ++version_[v];
   lane.max_error = std::max(lane.max_error, c.error);
   ++lane.collapses;
-  cost_->collapsed(s_, u, v, probe.shared);
+  cost_->collapsed(s_, u, v, probe);
+  if (s_.attribute_quadrics.enabled()) {
+    const bool placed = cost_->places_attributes();
+    // The kept wedges take the attribute values that minimise the merged attribute error, unless the
+    // cost placed them (after the collapse above, on the new faces).
+    const std::size_t k = static_cast<std::size_t>(s_.attribute_quadrics.dims());
+    const std::size_t layout = static_cast<std::size_t>(attribute_values_per_vertex(*s_.input));
+    for (int i = 0; i < probe.wedge_map_size; ++i) {
+      const auto [wu, wv] = probe.wedge_map[i];
+      if (!placed) s_.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), c.position, &s_.wedge_value[k * wv]);
+      s_.attribute_quadrics.merge(std::size_t(wv), std::size_t(wu));
+      if (rec) {
+        rec->attribute_vertices.push_back(wv);
+        rec->attributes_after.resize(rec->attributes_after.size() + layout);
+        output_attributes(wv, &rec->attributes_after[rec->attributes_after.size() - layout]);
+      }
+    }
+  }
 
   std::vector<Index>& ring = lane.ring;
   neighbours(v, ring);

@@ -589,13 +589,16 @@ class HoppeCost final : public CostModel {
     return scorers_.local().score(s, probe, u, v, freedom, probe.shared.size() == 1, out);
   }
 
-  void collapsed(EngineState& s, Index u, Index v, const std::vector<Index>& removed_faces) override {
+  bool places_attributes() const override { return dims_ > 0; }
+
+  void collapsed(EngineState& s, Index u, Index v, const Probe& probe) override {
+    const std::vector<Index>& removed_faces = probe.shared;
     // Re-assign the points of the old neighbourhood to the faces now around v.
     // Each point with the index in `around` of the face it had (none for a vanished face's points).
     const std::vector<Index>& around = s.faces_of(v);
     const std::size_t none = around.size();
-    auto& [moving, values, home_of, rows] = reassign_scratch_.local();
-    moving.clear(), values.clear(), home_of.clear();
+    auto& [moving, values, home_of, rows, landed] = reassign_scratch_.local();
+    moving.clear(), values.clear(), home_of.clear(), landed.clear();
     auto take_values = [&](Index f) {  // with E_scalar, the values go along
       if (dims_ == 0) return;
       values.insert(values.end(), face_values_[f].begin(), face_values_[f].end());
@@ -651,17 +654,14 @@ class HoppeCost final : public CostModel {
       sample.dist2 = best;
       face_samples_[best_face].push_back(sample);
       if (dims_ > 0) {
-        // Every face here has v at a corner, whose wedges took new values: measure every point again.
         const std::size_t k = static_cast<std::size_t>(dims_);
         const double* x = &values[(k + 2) * j];
         auto& list = face_values_[best_face];
-        list.insert(list.end(), x, x + k);
-        // Across a seam the faces interpolate another chart's values: nothing to compare there.
-        const bool same_chart = face_chart_[best_face] == static_cast<Index>(x[k + 1]);
-        list.push_back(same_chart ? scalar_distance2(s, sample.x, x, best_face) : 0.0);
-        list.push_back(x[k + 1]);
+        landed.push_back({best_face, list.size()});
+        list.insert(list.end(), x, x + k + 2);  // its distance is set below, once the values are placed
       }
     }
+    if (dims_ > 0) place_values(s, v, probe, moving, landed);
     if (removed_faces.size() == 1 && s.has(v, kBorder) && !curves_.point.empty()) reassign_boundary(s, u, v);
   }
 
@@ -733,6 +733,59 @@ class HoppeCost final : public CostModel {
     for (std::size_t f = 0; f < s.face.size(); ++f) face_chart_[f] = charts.find(int(f));
   }
 
+  // With E_scalar, after a collapse: the merged wedges at the values that minimise E_scalar over the points
+  // now on the faces around v (as the score assumed), then every such point's distance measured again
+  // (every face here has v at a corner). `landed`: per point of `moving`, its face and offset in
+  // face_values_.
+  void place_values(EngineState& s, Index v, const Probe& probe, const std::vector<Sample>& moving,
+                    const std::vector<std::pair<Index, std::size_t>>& landed) {
+    const std::size_t k = static_cast<std::size_t>(dims_);
+    struct Sums {
+      double b2 = 0;
+      std::array<double, kMostAttributeDims> by{};
+    };
+    std::array<Sums, 2> sums{};
+    auto merged_slot = [&](Index w) {
+      for (int i = 0; i < probe.wedge_map_size; ++i)
+        if (probe.wedge_map[i].second == w) return i;
+      return -1;
+    };
+    for (std::size_t j = 0; j < moving.size(); ++j) {
+      const auto [f, at] = landed[j];
+      const double* x = &face_values_[f][at];
+      if (face_chart_[f] != static_cast<Index>(x[k + 1])) continue;
+      int corner = 0;
+      while (s.corner_point(f, corner) != v) ++corner;
+      const int slot = merged_slot(s.face[f][corner]);
+      if (slot < 0) continue;
+      const Eigen::Vector3d c0 = s.position[s.corner_point(f, 0)], c1 = s.position[s.corner_point(f, 1)],
+                            c2 = s.position[s.corner_point(f, 2)];
+      const Eigen::Vector3d w = barycentric(c0, c1, c2, closest_point_on_triangle(moving[j].x, c0, c1, c2));
+      Sums& sum = sums[std::size_t(slot)];
+      sum.b2 += w[corner] * w[corner];
+      for (std::size_t d = 0; d < k; ++d) {
+        double y = x[d];
+        for (int c = 0; c < 3; ++c)
+          if (c != corner) y -= w[c] * s.wedge_value[k * std::size_t(s.face[f][c]) + d];
+        sum.by[d] += w[corner] * y;
+      }
+    }
+    for (int i = 0; i < probe.wedge_map_size; ++i) {
+      const auto [wu, wv] = probe.wedge_map[i];
+      double* value = &s.wedge_value[k * std::size_t(wv)];
+      const Sums& sum = sums[std::size_t(i)];
+      // Where no point pins the value down, the attribute quadrics' choice.
+      if (sum.b2 > 1e-12) for (std::size_t d = 0; d < k; ++d) value[d] = sum.by[d] / sum.b2;
+      else s.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), s.position[v], value);
+    }
+    for (std::size_t j = 0; j < moving.size(); ++j) {
+      const auto [f, at] = landed[j];
+      double* x = &face_values_[f][at];
+      // Across a seam the faces interpolate another chart's values: nothing to compare there.
+      x[k] = face_chart_[f] == static_cast<Index>(x[k + 1]) ? scalar_distance2(s, moving[j].x, x, f) : 0.0;
+    }
+  }
+
   // With E_scalar: the squared distance from a point's values to those the mesh interpolates at the
   // point's projection onto `face`.
   double scalar_distance2(const EngineState& s, const Eigen::Vector3d& x, const double* values, Index face) const {
@@ -757,9 +810,10 @@ class HoppeCost final : public CostModel {
   // Scratch of collapsed(), per thread (lanes collapse side by side).
   struct ReassignScratch {
     std::vector<Sample> moving;
-    std::vector<double> values;  ///< with E_scalar: dims_ + 1 per point of moving
+    std::vector<double> values;  ///< with E_scalar: dims_ + 2 per point of moving
     std::vector<std::size_t> home_of;  ///< per point of moving: its face's index in faces_of(v)
     BoundRows rows;
+    std::vector<std::pair<Index, std::size_t>> landed;  ///< with E_scalar: per point, its new face and offset
   };
   tbb::enumerable_thread_specific<ReassignScratch> reassign_scratch_;
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
