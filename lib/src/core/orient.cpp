@@ -42,13 +42,8 @@ std::vector<Index> faces_to_turn(const Mesh& mesh) {
   };
   std::vector<Link> links(static_cast<std::size_t>(start[n]));
   std::vector<Index> fill(start.begin(), start.end() - 1);
-  std::vector<char> open_patch_face(n, 0);  // the face has a boundary or non-manifold edge
   for (const detail::EdgeUse& e : edges) {
-    if (e.faces != 2) {
-      for (Index f : e.face)
-        if (f >= 0) open_patch_face[f] = 1;
-      continue;
-    }
+    if (e.faces != 2) continue;
     links[fill[e.face[0]]++] = {e.face[1], !e.consistent};
     links[fill[e.face[1]]++] = {e.face[0], !e.consistent};
   }
@@ -63,7 +58,7 @@ std::vector<Index> faces_to_turn(const Mesh& mesh) {
     bool orientable = true, closed = true, disagreed = false;
     for (std::size_t next = 0; next < members.size(); ++next) {
       const Index f = members[next];
-      closed &= !open_patch_face[f];
+      closed &= start[f + 1] - start[f] == 3;  // every edge shared with one other face
       for (Index i = start[f]; i < start[f + 1]; ++i) {
         const Link& l = links[i];
         disagreed |= l.turn;
