@@ -295,13 +295,14 @@ class HoppeScorer {
     for (std::size_t j = 0; j < points_.size(); ++j) {
       const Nearest& n = nearest_[j];
       const auto [tri, b_next] = on_triangle_[j];
-      if (star_chart_[std::size_t(tri)] != point_chart_[j]) continue;  // across a seam: not comparable
+      const StarAttributes& star = star_attributes_[std::size_t(tri)];
+      if (star.chart != point_chart_[j]) continue;  // across a seam: not comparable
       const Tri& t = tri_[std::size_t(tri)];
-      const auto& w = star_wedges_[std::size_t(tri)];
+      const auto& w = star.wedges;
       const double* next = &s.wedge_value[k * std::size_t(w[(t.moving + 1) % 3])];
       const double* last = &s.wedge_value[k * std::size_t(w[(t.moving + 2) % 3])];
       const double b_last = std::max(0.0, 1.0 - n.b - b_next), weight = weight_[j];
-      Merged& m = merged_[std::size_t(star_slot_[std::size_t(tri)])];
+      Merged& m = merged_[std::size_t(star.slot)];
       const double* x = &values_[k * j];
       m.sum_b2 += weight * n.b * n.b;
       for (std::size_t d = 0; d < k; ++d) {
@@ -327,9 +328,7 @@ class HoppeScorer {
     points_.clear();
     values_.clear();
     point_chart_.clear();
-    star_chart_.clear();
-    star_wedges_.clear();
-    star_slot_.clear();
+    star_attributes_.clear();
     merged_.clear();
     scalar_before_ = 0;
     const std::size_t dims = static_cast<std::size_t>(attribute_dims_);
@@ -404,10 +403,7 @@ class HoppeScorer {
     std::size_t slot = 0;
     while (slot < merged_.size() && merged_[slot].wedge != w[moving]) ++slot;
     if (slot == merged_.size()) merged_.push_back({w[moving], 0, 0, {}});
-
-    star_wedges_.push_back(w);
-    star_slot_.push_back(static_cast<int>(slot));
-    star_chart_.push_back(face_chart_[f]);
+    star_attributes_.push_back({w, static_cast<int>(slot), face_chart_[f]});
   }
 
   // Adds q to the ascending list r unless it is there (rings hold a dozen points: cheaper than sorting).
@@ -468,13 +464,17 @@ class HoppeScorer {
   };
   std::vector<Projection> curve_projections_;
   Index faces_ = 0;
-  // E_scalar's scratch: the points' values (k per point of points_), the star triangles' wedges and
-  // which merged wedge each one's moving corner is, and per merged wedge the sums of its solve.
+  // E_scalar's scratch: the points' values (k per point of points_) and charts, per star triangle its
+  // wedges, which merged wedge its moving corner is and its chart, and per merged wedge the sums of its solve.
   std::vector<double> values_;
-  std::vector<Index> point_chart_, star_chart_;  ///< the chart of each point of points_, of each star triangle
+  std::vector<Index> point_chart_;
   std::vector<OnTriangle> on_triangle_;  ///< per point of points_
-  std::vector<std::array<Index, 3>> star_wedges_;
-  std::vector<int> star_slot_;
+  struct StarAttributes {
+    std::array<Index, 3> wedges;  ///< the moving corner's: the wedge it merges into
+    int slot;                     ///< that wedge's place in merged_
+    Index chart;
+  };
+  std::vector<StarAttributes> star_attributes_;  ///< per triangle of star_
   struct Merged {
     Index wedge;
     double sum_b2, sum_y2;
@@ -657,7 +657,7 @@ class HoppeCost final : public CostModel {
         const std::size_t k = static_cast<std::size_t>(dims_);
         const double* x = &values[(k + 2) * j];
         auto& list = face_values_[best_face];
-        landed.push_back({best_face, list.size()});
+        landed.push_back({best_face, list.size(), {}});
         list.insert(list.end(), x, x + k + 2);  // its distance is set below, once the values are placed
       }
     }
@@ -733,12 +733,20 @@ class HoppeCost final : public CostModel {
     for (std::size_t f = 0; f < s.face.size(); ++f) face_chart_[f] = charts.find(int(f));
   }
 
+  // With E_scalar, a reassigned point: its new face, its offset in face_values_ there, and (on its own
+  // chart) its projection's barycentric weights.
+  struct Landed {
+    Index face;
+    std::size_t at;
+    Eigen::Vector3d weights;
+  };
+
   // With E_scalar, after a collapse: the merged wedges at the values that minimise E_scalar over the points
   // now on the faces around v (as the score assumed), then every such point's distance measured again
   // (every face here has v at a corner). `landed`: per point of `moving`, its face and offset in
   // face_values_.
   void place_values(EngineState& s, Index v, const Probe& probe, const std::vector<Sample>& moving,
-                    const std::vector<std::pair<Index, std::size_t>>& landed) {
+                    std::vector<Landed>& landed) {
     const std::size_t k = static_cast<std::size_t>(dims_);
     struct Sums {
       double b2 = 0;
@@ -751,16 +759,18 @@ class HoppeCost final : public CostModel {
       return -1;
     };
     for (std::size_t j = 0; j < moving.size(); ++j) {
-      const auto [f, at] = landed[j];
-      const double* x = &face_values_[f][at];
+      Landed& l = landed[j];
+      const Index f = l.face;
+      const double* x = &face_values_[f][l.at];
       if (face_chart_[f] != static_cast<Index>(x[k + 1])) continue;
+      // The point's projection, found once: the solve and its distance after both read it.
+      const Eigen::Vector3d c0 = s.position[s.corner_point(f, 0)], c1 = s.position[s.corner_point(f, 1)],
+                            c2 = s.position[s.corner_point(f, 2)];
+      const Eigen::Vector3d& w = l.weights = barycentric(c0, c1, c2, closest_point_on_triangle(moving[j].x, c0, c1, c2));
       int corner = 0;
       while (s.corner_point(f, corner) != v) ++corner;
       const int slot = merged_slot(s.face[f][corner]);
       if (slot < 0) continue;
-      const Eigen::Vector3d c0 = s.position[s.corner_point(f, 0)], c1 = s.position[s.corner_point(f, 1)],
-                            c2 = s.position[s.corner_point(f, 2)];
-      const Eigen::Vector3d w = barycentric(c0, c1, c2, closest_point_on_triangle(moving[j].x, c0, c1, c2));
       Sums& sum = sums[std::size_t(slot)];
       sum.b2 += w[corner] * w[corner];
       for (std::size_t d = 0; d < k; ++d) {
@@ -778,20 +788,16 @@ class HoppeCost final : public CostModel {
       if (sum.b2 > 1e-12) for (std::size_t d = 0; d < k; ++d) value[d] = sum.by[d] / sum.b2;
       else s.attribute_quadrics.best_at(std::size_t(wu), std::size_t(wv), s.position[v], value);
     }
-    for (std::size_t j = 0; j < moving.size(); ++j) {
-      const auto [f, at] = landed[j];
-      double* x = &face_values_[f][at];
+    for (const Landed& l : landed) {
+      double* x = &face_values_[l.face][l.at];
       // Across a seam the faces interpolate another chart's values: nothing to compare there.
-      x[k] = face_chart_[f] == static_cast<Index>(x[k + 1]) ? scalar_distance2(s, moving[j].x, x, f) : 0.0;
+      x[k] = face_chart_[l.face] == static_cast<Index>(x[k + 1]) ? scalar_distance2(s, l.weights, x, l.face) : 0.0;
     }
   }
 
-  // With E_scalar: the squared distance from a point's values to those the mesh interpolates at the
-  // point's projection onto `face`.
-  double scalar_distance2(const EngineState& s, const Eigen::Vector3d& x, const double* values, Index face) const {
-    const Eigen::Vector3d a = s.position[s.corner_point(face, 0)], b = s.position[s.corner_point(face, 1)],
-                          c = s.position[s.corner_point(face, 2)];
-    const Eigen::Vector3d weights = barycentric(a, b, c, closest_point_on_triangle(x, a, b, c));
+  // With E_scalar: the squared distance from a point's values to those the mesh interpolates at its
+  // projection onto `face`, at barycentric `weights` there.
+  double scalar_distance2(const EngineState& s, const Eigen::Vector3d& weights, const double* values, Index face) const {
     const std::size_t k = static_cast<std::size_t>(dims_);
     double d2 = 0;
     for (std::size_t d = 0; d < k; ++d) {
@@ -813,7 +819,7 @@ class HoppeCost final : public CostModel {
     std::vector<double> values;  ///< with E_scalar: dims_ + 2 per point of moving
     std::vector<std::size_t> home_of;  ///< per point of moving: its face's index in faces_of(v)
     BoundRows rows;
-    std::vector<std::pair<Index, std::size_t>> landed;  ///< with E_scalar: per point, its new face and offset
+    std::vector<Landed> landed;  ///< with E_scalar: per point of moving
   };
   tbb::enumerable_thread_specific<ReassignScratch> reassign_scratch_;
   double margin_ = 0;  ///< slack for rounding in the lower bounds: 1e-9 of the input's extent
