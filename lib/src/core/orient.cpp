@@ -8,8 +8,9 @@
 #include "core/topology.h"
 
 namespace lodkit {
-namespace detail {
+namespace {
 
+// The faces orient_consistently() turns, ascending (none when every patch agrees with itself).
 std::vector<Index> faces_to_turn(const Mesh& mesh) {
   // Faces on welded positions (as inspect() and the simplifier see them); a face without three distinct
   // points joins nothing and is left as it is.
@@ -98,12 +99,25 @@ void turn_faces(Mesh& mesh, const std::vector<Index>& faces) {
   for (Index f : faces) std::swap(mesh.triangles(f, 1), mesh.triangles(f, 2));
 }
 
-}  // namespace detail
+}  // namespace
 
 Index orient_consistently(Mesh& mesh) {
-  const std::vector<Index> faces = detail::faces_to_turn(mesh);
-  detail::turn_faces(mesh, faces);
+  const std::vector<Index> faces = faces_to_turn(mesh);
+  turn_faces(mesh, faces);
   return static_cast<Index>(faces.size());
 }
+
+namespace detail {
+
+const Mesh& oriented(const Mesh& mesh, bool orient, Mesh& copy, Index& turned) {
+  const std::vector<Index> faces = orient ? faces_to_turn(mesh) : std::vector<Index>{};
+  turned = static_cast<Index>(faces.size());
+  if (faces.empty()) return mesh;
+  copy = mesh;
+  turn_faces(copy, faces);
+  return copy;
+}
+
+}  // namespace detail
 
 }  // namespace lodkit

@@ -21,10 +21,8 @@ std::vector<EdgeUse> classify_edges(const std::vector<std::array<Index, 3>>& fac
 /// For each point, whether the faces around it fail to form a single fan (a "bow tie").
 std::vector<char> non_manifold_fans(Index num_points, const std::vector<std::array<Index, 3>>& faces);
 
-/// The faces orient_consistently() turns, ascending (none when every patch agrees with itself).
-std::vector<Index> faces_to_turn(const Mesh& mesh);
-
-/// Swaps corners 1 and 2 of each of `faces`.
-void turn_faces(Mesh& mesh, const std::vector<Index>& faces);
+/// `mesh` itself, or, when `orient` and some of its faces disagree on orientation, `copy` made to hold it
+/// with them turned (orient_consistently()); `turned` counts them. A mesh that agrees is not copied.
+const Mesh& oriented(const Mesh& mesh, bool orient, Mesh& copy, Index& turned);
 
 }  // namespace lodkit::detail

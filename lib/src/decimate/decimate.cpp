@@ -343,11 +343,8 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
   std::vector<double> thresholds{0.0};
   for (int k = 32; k >= 0; --k) thresholds.push_back(max_error * std::pow(2.0, -0.5 * k));
 
-  const std::vector<Index> turn = options.orient_faces ? detail::faces_to_turn(mesh) : std::vector<Index>{};
   Mesh turned;
-  if (!turn.empty()) turned = mesh, detail::turn_faces(turned, turn);
-  r.reoriented_faces = static_cast<Index>(turn.size());
-  Decimator d(turn.empty() ? mesh : turned, options);
+  Decimator d(detail::oriented(mesh, options.orient_faces, turned, r.reoriented_faces), options);
   Star s;
   for (double t : thresholds) {
     for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v) {

@@ -49,9 +49,8 @@ ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptio
   // An input whose faces disagree on orientation is built with them turned (SimplifyOptions::orient_faces;
   // simplify() leaves that to its caller when it records, as the records name the corners replayed here).
   Mesh turned;
-  const std::vector<Index> turn = options.simplify.orient_faces ? detail::faces_to_turn(input) : std::vector<Index>{};
-  if (!turn.empty()) turned = input, detail::turn_faces(turned, turn);
-  const Mesh& mesh = turn.empty() ? input : turned;
+  Index turned_faces = 0;
+  const Mesh& mesh = detail::oriented(input, options.simplify.orient_faces, turned, turned_faces);
   if (options.base_faces && *options.base_faces < 0)
     throw Error(fmt::format("progressive mesh: base face count must not be negative, got {}", *options.base_faces));
   SimplifyOptions so = options.simplify;

@@ -85,16 +85,18 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   // does: it is built from a copy without them, and the output gets fresh ones. Faces that disagree on
   // orientation are turned, as simplify() turns them (orient_faces).
   const bool drop_normals = options.recompute_normals && mesh.has_normals();
-  const std::vector<Index> turn = options.orient_faces ? detail::faces_to_turn(mesh) : std::vector<Index>{};
-  Mesh copy;
-  if (drop_normals || !turn.empty()) copy = mesh;
-  if (drop_normals) copy.attributes.normals.resize(0, 3);
-  detail::turn_faces(copy, turn);
-  const Mesh& source = drop_normals || !turn.empty() ? copy : mesh;
+  Mesh positions_only, turned;
+  if (drop_normals) {
+    positions_only = mesh;
+    positions_only.attributes.normals.resize(0, 3);
+  }
+  Index turned_faces = 0;
+  const Mesh& source = detail::oriented(drop_normals ? positions_only : mesh, options.orient_faces, turned, turned_faces);
 
   ProgressiveOptions po;
   po.simplify = options;
   po.simplify.recompute_normals = false;
+  po.simplify.orient_faces = false;  // turned above
   const Index target = detail::requested_faces(mesh, options);  // 0: as far as legal collapses go
   po.base_faces = target;
   const ProgressiveMesh pm = build_progressive_mesh(source, po);
@@ -130,7 +132,7 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   r.mesh = std::move(level->mesh);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   r.vertex_origin = std::move(level->vertex_origin);
-  r.reoriented_faces = static_cast<Index>(turn.size());
+  r.reoriented_faces = turned_faces;
   r.faces_in = mesh.num_faces();
   r.vertices_in = mesh.num_vertices();
   r.faces_out = r.mesh.num_faces();
