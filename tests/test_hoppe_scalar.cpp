@@ -10,8 +10,6 @@
 #include <map>
 #include <tbb/global_control.h>
 
-#include "core/geometry.h"
-#include "metrics/aabb_tree.h"
 #include "test_util.h"
 
 namespace lodkit {
@@ -30,21 +28,8 @@ Mesh colour_disc_grid(int n = 40) {
   return m;
 }
 
-/// RMS over the input's vertices of the difference between their colour and the output's, interpolated
-/// at the output's closest point.
-double colour_rms(const Mesh& input, const Mesh& output) {
-  const detail::AabbTree tree(output);
-  double sum = 0;
-  for (Index v = 0; v < input.num_vertices(); ++v) {
-    const auto hit = tree.closest(input.positions.row(v).transpose());
-    const auto corner = [&](int k) { return Eigen::Vector3d(output.positions.row(output.triangles(hit.face, k)).transpose()); };
-    const Eigen::Vector3d w = detail::barycentric(corner(0), corner(1), corner(2), hit.point);
-    Eigen::RowVector4d at = Eigen::RowVector4d::Zero();
-    for (int k = 0; k < 3; ++k) at += w[k] * output.attributes.colours.row(output.triangles(hit.face, k)).cast<double>();
-    sum += (input.attributes.colours.row(v).cast<double>() - at).squaredNorm();
-  }
-  return std::sqrt(sum / input.num_vertices());
-}
+/// The colour RMS compare() measures between two coloured meshes.
+double colour_rms(const Mesh& input, const Mesh& output) { return compare(input, output).colour_rms.value(); }
 
 TEST(HoppeScalar, KeepsAColourDiscThatTheGeometryCannotSee) {
   const Mesh grid = colour_disc_grid();
