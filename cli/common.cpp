@@ -172,4 +172,16 @@ CLI::Option* add_inverted_faces_option(CLI::App* app, std::optional<std::string>
       ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
 }
 
+CLI::Option* add_keep_orientation_flag(CLI::App* app, bool& keep) {
+  return app->add_flag("--keep-orientation", keep,
+                       "Leave faces that disagree with their neighbours' orientation as they are (the ends of their "
+                       "shared edges then stay locked); by default they are turned to agree first");
+}
+
+void print_reoriented(Index faces) {
+  if (faces > 0)
+    fmt::print(stderr, "  turned {} faces of the input to agree with their neighbours' orientation first "
+               "(--keep-orientation leaves them)\n", thousands(faces));
+}
+
 }  // namespace lodkit::cli

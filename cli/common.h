@@ -74,4 +74,9 @@ CLI::Validator format_validator();
 /// and pm build take it.
 CLI::Option* add_inverted_faces_option(CLI::App* app, std::optional<std::string>& mode);
 
+/// `--keep-orientation` (SimplifyOptions::orient_faces off), as simplify and pm build take it.
+CLI::Option* add_keep_orientation_flag(CLI::App* app, bool& keep);
+/// The summary's line on faces turned to agree on orientation (nothing when none were).
+void print_reoriented(Index faces);
+
 }  // namespace lodkit::cli

@@ -83,9 +83,7 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   } else if (!global.quiet) {
     fmt::print(stderr, "pm build ({}): {} faces -> base of {} faces + {} splits in {:.3f} s\n", o.method,
                thousands(mesh.num_faces()), thousands(pm.num_faces(0)), thousands(pm.max_level()), build_seconds);
-    if (reoriented > 0)
-      fmt::print(stderr, "  turned {} faces of the input to agree with their neighbours' orientation first "
-                 "(--keep-orientation leaves them)\n", thousands(reoriented));
+    print_reoriented(reoriented);
     if (o.measure)
       fmt::print(stderr, "  measured {} levels' distances to the input in {:.3f} s\n", pm.measured.size(), measure_seconds);
     if (had_normals && !o.drop_normals && 2 * pm.num_faces(0) > mesh.num_faces())
@@ -338,9 +336,7 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
       ->delimiter(',')->check(kNonNegative);
   build->add_flag("--drop-normals", opt->drop_normals,
                   "Build without the input's normals (flat shading makes every edge a seam); levels then have none");
-  build->add_flag("--keep-orientation", opt->keep_orientation,
-                  "Leave faces that disagree with their neighbours' orientation as they are (the ends of their "
-                  "shared edges then stay locked); by default they are turned to agree first");
+  add_keep_orientation_flag(build, opt->keep_orientation);
   build->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   build->footer(R"(Lossless streams reproduce the input exactly (positions bit for bit, same triangles in the
 same order; without its normals with --drop-normals; faces that disagreed on orientation turned to

@@ -129,11 +129,6 @@ std::optional<Measured> measure(const Mesh& input, const Mesh& output, Index reo
   return Measured{compare(input, output), count_flipped_faces(turned, output)};
 }
 
-void print_reoriented(Index faces) {
-  if (faces > 0)
-    fmt::print(stderr, "  turned {} faces of the input to agree with their neighbours' orientation first "
-               "(--keep-orientation leaves them)\n", thousands(faces));
-}
 constexpr const char* kNotMeasured = "the output has no faces";
 
 // j["measured"], or null and j["not_measured"] when there was nothing to measure.
@@ -439,9 +434,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::Range(0, 1000));
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
-  sub->add_flag("--keep-orientation", opt->keep_orientation,
-                "Leave faces that disagree with their neighbours' orientation as they are (the ends of their "
-                "shared edges then stay locked); by default they are turned to agree first");
+  add_keep_orientation_flag(sub, opt->keep_orientation);
   add_inverted_faces_option(sub, opt->inverted_faces);
   sub->add_flag("--no-inverted-faces", opt->no_inverted_faces, "The same as --inverted-faces refuse")
       ->excludes("--inverted-faces");
