@@ -233,6 +233,31 @@ TEST(CliCompare, ColoursAreReportedWhenBothMeshesHaveThem) {
   EXPECT_FALSE(nlohmann::json::parse(run(dir, "compare a.ply plain.ply --json").out).contains("colour_rms"));
 }
 
+TEST(CliCompare, ShadingNormalsAreReportedWhenBothMeshesHaveThem) {
+  test::ScratchDir dir("cli-compare-shading");
+  Mesh a = make_icosphere({.subdivisions = 2});
+  a.attributes.normals = compute_vertex_normals(a);
+  Mesh b = a;
+  b.attributes.normals.col(2).array() *= -1.0;  // every normal mirrored in z: 0 to 180 degrees off
+  write_mesh(a, (dir / "a.ply").string());
+  write_mesh(b, (dir / "b.ply").string());
+  CliRun r = run(dir, "compare a.ply a.ply --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["shading_rms_deg"].get<double>(), 0.0, 1e-6);
+  r = run(dir, "compare a.ply b.ply --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["shading_rms_deg"].get<double>(), 30.0);
+  EXPECT_GT(j["a_to_b"]["shading_max_deg"].get<double>(), 170.0);
+  r = run(dir, "compare a.ply b.ply");
+  EXPECT_NE(r.out.find("shading normals"), std::string::npos) << r.out;
+  r = run(dir, "simplify a.ply -o s.ply --ratio 0.5 --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["measured"].contains("shading_rms_deg")) << r.out;
+  write_mesh(make_icosphere({.subdivisions = 2}), (dir / "plain.ply").string());
+  EXPECT_FALSE(nlohmann::json::parse(run(dir, "compare a.ply plain.ply --json").out).contains("shading_rms_deg"));
+}
+
 TEST(CliCompare, WithinDecidesAndExitsByTheAnswer) {
   // --within E against the full comparison: just above its certified bound, proved within (exit 0);
   // just below the distance it attained, a point farther is named (exit 3).

@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <numbers>
 #include <lodkit/error.h>
 #include <lodkit/metrics.h>
 #include <lodkit/primitives.h>
@@ -20,6 +21,33 @@ TEST(Compare, IdenticalMeshesAreZeroApart) {
   EXPECT_NEAR(c.rms, 0.0, 1e-12);
   EXPECT_NEAR(c.a_to_b.normal_deviation_max_deg, 0.0, 1e-6);
   EXPECT_GE(c.a_to_b.samples, 10 * m.num_faces());
+}
+
+TEST(Compare, ShadingNormalsAreComparedWhereBothMeshesHaveThem) {
+  // A flat grid whose normals lean in x by an amount that varies across it (all in the xz-plane, so
+  // interpolation matters and stays there), against the same normals turned 10 degrees about y: 10
+  // degrees apart everywhere, both ways. A normal that vanishes counts 90; no normals, no figures.
+  Mesh a = make_grid({.divisions_x = 8, .divisions_y = 8});
+  a.attributes.normals.resize(a.num_vertices(), 3);
+  for (Index v = 0; v < a.num_vertices(); ++v)
+    a.attributes.normals.row(v) = Eigen::Vector3d(0.6 * a.positions(v, 0), 0.0, 1.0).normalized();
+  Mesh b = a;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(10.0 * std::numbers::pi / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  for (Index v = 0; v < b.num_vertices(); ++v) b.attributes.normals.row(v) = (turn * b.attributes.normals.row(v).transpose()).transpose();
+  const Comparison c = compare(a, b);
+  ASSERT_TRUE(c.shading_rms_deg && c.a_to_b.shading_max_deg && c.b_to_a.shading_rms_deg);
+  EXPECT_NEAR(*c.shading_rms_deg, 10.0, 1e-4);
+  EXPECT_NEAR(*c.a_to_b.shading_max_deg, 10.0, 1e-4);
+  EXPECT_NEAR(*c.b_to_a.shading_max_deg, 10.0, 1e-4);
+  EXPECT_NEAR(*compare(a, a).shading_rms_deg, 0.0, 1e-6);
+  Mesh vanishing = a;
+  vanishing.attributes.normals.setZero();
+  EXPECT_NEAR(*compare(a, vanishing).a_to_b.shading_max_deg, 90.0, 1e-9);
+  Mesh plain = a;
+  plain.attributes.normals.resize(0, 3);
+  EXPECT_FALSE(compare(a, plain).shading_rms_deg);
+  EXPECT_FALSE(compare(plain, a).b_to_a.shading_max_deg);
+  EXPECT_FALSE(compare(a, b).colour_rms);
 }
 
 TEST(Compare, ColoursAreComparedWhereBothMeshesHaveThem) {

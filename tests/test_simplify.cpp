@@ -909,5 +909,29 @@ TEST(SimplifyAttributes, WeightedColoursStayInRangeAndTheBorderStaysSharp) {
   EXPECT_LE(mixed(weighted), weighted.num_vertices() / 4);
 }
 
+TEST(SimplifyAttributes, WeightedNormalsKeepTheShadingThatTheGeometryCannotSee) {
+  // A flat grid whose normals lean outwards inside a disc (a shading bump with no bump): geometry
+  // alone cannot tell its collapses apart, so without a normal weight the lean is smeared across the
+  // grid (RMS 4.1 degrees with quadric, 4.6 with hoppe). With the weight, compare()'s shading-normal
+  // deviation comes out under a tenth of that (0.08 and 0.06 degrees measured), for both costs.
+  Mesh grid = make_grid({.divisions_x = 32, .divisions_y = 32});
+  grid.attributes.normals.resize(grid.num_vertices(), 3);
+  for (Index v = 0; v < grid.num_vertices(); ++v) {
+    const Eigen::Vector2d at(grid.positions(v, 0), grid.positions(v, 1));
+    const Eigen::Vector2d lean = at.norm() < 0.25 ? at : Eigen::Vector2d::Zero();
+    grid.attributes.normals.row(v) = Eigen::Vector3d(lean.x(), lean.y(), 0.5).normalized();
+  }
+  for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe}) {
+    SimplifyOptions o{.method = method, .target_ratio = 0.1};
+    const SimplifyResult plain = simplify(grid, o);
+    o.attribute_weights.normals = 0.1;
+    const SimplifyResult weighted = simplify(grid, o);
+    EXPECT_EQ(weighted.reason, StopReason::TargetReached);
+    const double without = *compare(grid, plain.mesh).shading_rms_deg, with = *compare(grid, weighted.mesh).shading_rms_deg;
+    EXPECT_LT(with, 0.1 * without) << to_string(method) << ": " << with << " against " << without;
+    EXPECT_TRUE(inspect(weighted.mesh).oriented);
+  }
+}
+
 }  // namespace
 }  // namespace lodkit

@@ -55,6 +55,7 @@ nlohmann::json directed_json(const DirectedDistance& d, const Comparison& c) {
           {"rms", d.rms}, {"rms_percent", c.percent(d.rms)}, {"normal_deviation_mean_deg", d.normal_deviation_mean_deg},
           {"normal_deviation_max_deg", d.normal_deviation_max_deg}, {"samples", d.samples}};
   if (d.colour_rms) j["colour_rms"] = *d.colour_rms, j["colour_max"] = *d.colour_max;
+  if (d.shading_rms_deg) j["shading_rms_deg"] = *d.shading_rms_deg, j["shading_max_deg"] = *d.shading_max_deg;
   return j;
 }
 
@@ -93,6 +94,7 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
                                {"rms", c.rms}, {"rms_percent", c.percent(c.rms)},
                                {"a_to_b", directed_json(c.a_to_b, c)}, {"b_to_a", directed_json(c.b_to_a, c)}};
               if (c.colour_rms) j["colour_rms"] = *c.colour_rms;
+              if (c.shading_rms_deg) j["shading_rms_deg"] = *c.shading_rms_deg;
               fmt::print("{}\n", j.dump(2));
               return 0;
             }
@@ -115,6 +117,9 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
             if (c.colour_rms)
               fmt::print("{:<22} {:>14.6g} (RMS), A->B {:.6g}, B->A {:.6g} (max)\n", "colour deviation", *c.colour_rms,
                          *c.a_to_b.colour_max, *c.b_to_a.colour_max);
+            if (c.shading_rms_deg)
+              fmt::print("{:<22} {:>14.3f} deg (RMS), A->B {:.1f}, B->A {:.1f} deg (max)\n", "shading normals",
+                         *c.shading_rms_deg, *c.a_to_b.shading_max_deg, *c.b_to_a.shading_max_deg);
             fmt::print("{:<22} {:>14} ({} + {})\n", "samples", thousands(c.a_to_b.samples + c.b_to_a.samples),
                        thousands(c.a_to_b.samples), thousands(c.b_to_a.samples));
             fmt::print("{:<22} {:>14.6g}\n", "diagonal of A", c.diagonal);

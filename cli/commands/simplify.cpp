@@ -144,6 +144,7 @@ void put_measured(nlohmann::json& j, const std::optional<Measured>& m) {
                    {"hausdorff_bound", c.hausdorff_bound}, {"hausdorff_bound_percent", c.percent(c.hausdorff_bound)}, {"rms", c.rms},
                    {"rms_percent", c.percent(c.rms)}, {"inverted_faces", m->inverted_faces}};
   if (c.colour_rms) j["measured"]["colour_rms"] = *c.colour_rms;
+  if (c.shading_rms_deg) j["measured"]["shading_rms_deg"] = *c.shading_rms_deg;
 }
 
 void print_measured(const std::optional<Measured>& m) {
@@ -156,6 +157,8 @@ void print_measured(const std::optional<Measured>& m) {
   fmt::print(stderr, "  measured: Hausdorff {:.6g} ({:.4f}%) at ({:.6g}, {:.6g}, {:.6g}), RMS {:.6g} ({:.4f}%), {} faces facing against the input\n",
              c.hausdorff, c.percent(c.hausdorff), at.x(), at.y(), at.z(), c.rms, c.percent(c.rms), m->inverted_faces);
   if (c.colour_rms) fmt::print(stderr, "  measured: colour RMS {:.6g} (both directions; channels 0..1)\n", *c.colour_rms);
+  if (c.shading_rms_deg)
+    fmt::print(stderr, "  measured: shading normals RMS {:.3f} deg (both directions)\n", *c.shading_rms_deg);
 }
 
 int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {

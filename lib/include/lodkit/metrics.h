@@ -45,6 +45,10 @@ struct DirectedDistance {
   /// closest point, compared (Euclidean over red, green, blue and alpha; 0..1 per channel), area-weighted
   /// over the face samples like `rms`, and the largest over all samples.
   std::optional<double> colour_rms{}, colour_max{};
+  /// When both meshes have vertex normals: the angle between the shading normals each surface
+  /// interpolates at a sample and at its closest point (degrees; 90 where an interpolated normal
+  /// vanishes), area-weighted over the face samples like `rms`, and the largest over all samples.
+  std::optional<double> shading_rms_deg{}, shading_max_deg{};
   long long samples = 0;
 };
 
@@ -58,6 +62,8 @@ struct Comparison {
   double diagonal = 0.0;    ///< bounding-box diagonal of A: the reference for percentages
   /// Both directions' colour_rms combined as `rms` is (when both meshes have vertex colours).
   std::optional<double> colour_rms{};
+  /// Both directions' shading_rms_deg combined as `rms` is (when both meshes have vertex normals).
+  std::optional<double> shading_rms_deg{};
   /// The direction whose maximum is the Hausdorff distance (A -> B on a tie): its max_at is where to look.
   const DirectedDistance& farther() const { return a_to_b.max >= b_to_a.max ? a_to_b : b_to_a; }
   double percent(double value) const { return diagonal > 0 ? 100.0 * value / diagonal : 0.0; }

@@ -128,6 +128,7 @@ struct Measured {
   double distance, angle_deg;
   Index nearest;  // the face of the other mesh nearest the point
   double colour;  // the colour difference there (both meshes coloured), else 0
+  double shading_deg;  // the angle between the shading normals there (both meshes with normals), else 0
 };
 
 // The vertex colour mesh m interpolates at point p of face f.
@@ -138,22 +139,41 @@ Eigen::Vector4d colour_at(const Mesh& m, Index f, const Eigen::Vector3d& p) {
   return c;
 }
 
+// The unit shading normal mesh m interpolates at point p of face f (zero where the corners' cancel).
+Eigen::Vector3d shading_normal_at(const Mesh& m, Index f, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d w = detail::barycentric(corner(m, f, 0), corner(m, f, 1), corner(m, f, 2), p);
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) n += w[k] * m.attributes.normals.row(m.triangles(f, k)).transpose().cast<double>();
+  const double length = n.norm();
+  return length > 0 ? Eigen::Vector3d(n / length) : Eigen::Vector3d::Zero();
+}
+
+// The angle between two vectors in degrees (atan2 keeps small angles accurate where acos(dot) would
+// lose them); 90 when either is zero.
+double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  if (a.isZero() || b.isZero()) return 90.0;
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / std::numbers::pi;
+}
+
 // Each distinct point's distance to `to`, and the angle between its face's normal and the normal of
 // the face it is closest to.
 std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh& to, const detail::AabbTree& tree) {
   std::vector<Measured> result(set.points.size());
   const bool colours = from.has_colours() && to.has_colours();
+  const bool normals = from.has_normals() && to.has_normals();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.points.size(), 1024), [&](const auto& range) {
     Index hint = -1;
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       const auto hit = tree.closest(set.points[i].position, hint);
       hint = hit.face;
-      const Eigen::Vector3d n0 = face_normal(from, set.points[i].face), n1 = face_normal(to, hit.face);
-      // atan2 keeps small angles accurate where acos(dot) would lose them.
-      const double colour =
-          colours ? (colour_at(from, set.points[i].face, set.points[i].position) - colour_at(to, hit.face, hit.point)).norm() : 0.0;
+      const SampleSet::Point& p = set.points[i];
+      const double colour = colours ? (colour_at(from, p.face, p.position) - colour_at(to, hit.face, hit.point)).norm() : 0.0;
+      const double shading =
+          normals ? angle_deg(shading_normal_at(from, p.face, p.position), shading_normal_at(to, hit.face, hit.point)) : 0.0;
+      // (A face without area has a zero normal, which counts 0 degrees here.)
+      const Eigen::Vector3d n0 = face_normal(from, p.face), n1 = face_normal(to, hit.face);
       result[i] = {std::sqrt(hit.squared_distance), std::atan2(n0.cross(n1).norm(), n0.dot(n1)) * 180.0 / std::numbers::pi,
-                   hit.face, colour};
+                   hit.face, colour, shading};
     }
   });
   return result;
@@ -163,7 +183,7 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
                           std::span<const std::array<Index, 3>> to_neighbours, const CompareOptions& o) {
   const std::vector<Measured> measured = measure(sampled, from, to, tree);
   DirectedDistance d;
-  double weight = 0, sum = 0, sum2 = 0, angle_sum = 0, colour2 = 0, colour_max = 0;
+  double weight = 0, sum = 0, sum2 = 0, angle_sum = 0, colour2 = 0, colour_max = 0, shading2 = 0, shading_max = 0;
   std::uint32_t farthest = 0;
   for (const SampleSet::Sample& s : sampled.samples) {
     const Measured& m = measured[s.point];
@@ -177,6 +197,8 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
     angle_sum += w * m.angle_deg;
     colour2 += w * m.colour * m.colour;
     colour_max = std::max(colour_max, m.colour);
+    shading2 += w * m.shading_deg * m.shading_deg;
+    shading_max = std::max(shading_max, m.shading_deg);
   }
   if (weight > 0) {
     d.mean = sum / weight;
@@ -186,6 +208,10 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
   if (from.has_colours() && to.has_colours()) {
     d.colour_rms = weight > 0 ? std::sqrt(colour2 / weight) : 0.0;
     d.colour_max = colour_max;
+  }
+  if (from.has_normals() && to.has_normals()) {
+    d.shading_rms_deg = weight > 0 ? std::sqrt(shading2 / weight) : 0.0;
+    d.shading_max_deg = shading_max;
   }
   d.samples = static_cast<long long>(sampled.samples.size());
 
@@ -218,6 +244,9 @@ Comparison combine(const Mesh& a, DirectedDistance a_to_b, DirectedDistance b_to
   c.rms = std::sqrt(0.5 * (c.a_to_b.rms * c.a_to_b.rms + c.b_to_a.rms * c.b_to_a.rms));
   if (c.a_to_b.colour_rms && c.b_to_a.colour_rms)
     c.colour_rms = std::sqrt(0.5 * (*c.a_to_b.colour_rms * *c.a_to_b.colour_rms + *c.b_to_a.colour_rms * *c.b_to_a.colour_rms));
+  if (c.a_to_b.shading_rms_deg && c.b_to_a.shading_rms_deg)
+    c.shading_rms_deg =
+        std::sqrt(0.5 * (*c.a_to_b.shading_rms_deg * *c.a_to_b.shading_rms_deg + *c.b_to_a.shading_rms_deg * *c.b_to_a.shading_rms_deg));
   const auto box = bounding_box(a);
   c.diagonal = box.isEmpty() ? 0.0 : box.diagonal().norm();
   return c;
