@@ -258,6 +258,30 @@ TEST(CliCompare, ShadingNormalsAreReportedWhenBothMeshesHaveThem) {
   EXPECT_FALSE(nlohmann::json::parse(run(dir, "compare a.ply plain.ply --json").out).contains("shading_rms_deg"));
 }
 
+TEST(CliSimplify, NormalsAndColoursAreFittedUnlessAskedNotTo) {
+  test::ScratchDir dir("cli-simplify-attribute-fit");
+  Mesh a = test::bumpy_sphere(3, 0.03);
+  a.attributes.normals = compute_vertex_normals(a);
+  write_mesh(a, (dir / "a.ply").string());
+  CliRun r = run(dir, "simplify a.ply -o s.ply --ratio 0.1 --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto fitted = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(fitted.contains("attribute_fit")) << r.out;
+  EXPECT_TRUE(fitted["attribute_fit"]["normals"].get<bool>());
+  EXPECT_FALSE(fitted["attribute_fit"]["colours"].get<bool>());
+  r = run(dir, "simplify a.ply -o k.ply --ratio 0.1 --measure --json --no-attribute-fit");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto kept = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(kept.contains("attribute_fit"));
+  EXPECT_LT(fitted["measured"]["shading_rms_deg"].get<double>(), kept["measured"]["shading_rms_deg"].get<double>());
+  EXPECT_EQ(fitted["measured"]["hausdorff"].get<double>(), kept["measured"]["hausdorff"].get<double>());
+  r = run(dir, "simplify a.ply -o s.ply --ratio 0.1");
+  EXPECT_NE(r.err.find("normals fitted to the input's"), std::string::npos) << r.err;
+  r = run(dir, "simplify a.ply -o d.ply --ratio 0.1 --method schroeder --no-attribute-fit");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("--no-attribute-fit"), std::string::npos) << r.err;
+}
+
 TEST(CliCompare, WithinDecidesAndExitsByTheAnswer) {
   // --within E against the full comparison: just above its certified bound, proved within (exit 0);
   // just below the distance it attained, a point farther is named (exit 3).

@@ -86,9 +86,11 @@ TEST(ProgressiveMesh, LevelsEqualSimplifyToTheSameFaceCount) {
       const ProgressiveMesh pm = build_progressive_mesh(input, o);
       for (Index level : {Index(0), pm.max_level() / 7, pm.max_level() / 2, pm.max_level() - 1}) {
         SimplifyOptions so{.method = method};
-        // A level keeps the collapses' positions; simplify() would refit them (quadric) or fit them (hoppe).
+        // A level keeps the collapses' positions and values; simplify() would refit them (quadric), fit them
+        // (hoppe) and fit the normals and colours.
         so.refit_passes = 0;
         so.hoppe_fit_passes = 0;
+        so.fit_attributes = false;
         so.target_faces = pm.num_faces(level);
         const SimplifyResult r = simplify(input, so);
         const ExtractedLevel e = extract_level(pm, level);
@@ -113,6 +115,7 @@ TEST(ProgressiveMesh, LevelsEqualSimplifyWithAttributeAwareCosts) {
       SimplifyOptions so = o.simplify;
       so.refit_passes = 0;
       so.hoppe_fit_passes = 0;
+      so.fit_attributes = false;
       so.target_faces = pm.num_faces(level);
       const SimplifyResult r = simplify(input, so);
       const Mesh m = extract_level(pm, level).mesh;

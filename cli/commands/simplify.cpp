@@ -27,6 +27,7 @@ struct SimplifyCliOptions {
          viewport = ScreenSpaceBudget{}.viewport_pixels;
   bool preserve_boundary = false, lock_boundary = false, allow_topology_change = false;
   bool measure = false, json = false, recompute_normals = false, no_inverted_faces = false, keep_orientation = false;
+  bool no_attribute_fit = false;
   std::optional<std::string> inverted_faces;  // allow|avoid|refuse; unset: by method
   double max_normal_change = SimplifyOptions{}.max_normal_change_deg, crease_weight = SimplifyOptions{}.crease_weight;
   std::vector<double> attribute_weights;
@@ -227,6 +228,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
     s.attribute_weights = {o.attribute_weights[0], o.attribute_weights[1], o.attribute_weights[2]};
   }
   s.recompute_normals = o.recompute_normals;
+  s.fit_attributes = !o.no_attribute_fit;
   s.orient_faces = !o.keep_orientation;
   if (o.inverted_faces) s.inverted_faces = parse_inverted_faces(*o.inverted_faces);
   if (o.no_inverted_faces) s.inverted_faces = InvertedFaces::Refuse;
@@ -288,6 +290,9 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       j["hoppe_fit"] = {{"passes", r.hoppe_fit->passes}, {"energy_before", r.hoppe_fit->energy_before},
                         {"energy_after", r.hoppe_fit->energy_after}, {"points_sent_back", r.hoppe_fit->points_sent_back},
                         {"seconds", r.hoppe_fit->seconds}};
+    if (r.attribute_fit)
+      j["attribute_fit"] = {{"normals", r.attribute_fit->normals}, {"colours", r.attribute_fit->colours},
+                            {"samples", r.attribute_fit->samples}, {"seconds", r.attribute_fit->seconds}};
     if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
     if (r.refit)
       j["refit"] = {{"passes", r.refit->passes}, {"steps", r.refit->steps}, {"rms_steps", r.refit->rms_steps},
@@ -334,6 +339,11 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                  r.hoppe_fit->energy_before, r.hoppe_fit->energy_after,
                  r.hoppe_fit->energy_before > 0 ? 100.0 * (r.hoppe_fit->energy_after / r.hoppe_fit->energy_before - 1) : 0.0,
                  r.hoppe_fit->passes, r.hoppe_fit->passes == 1 ? "" : "es", r.hoppe_fit->points_sent_back, r.hoppe_fit->seconds);
+    if (r.attribute_fit) {
+      const AttributeFitReport& a = *r.attribute_fit;
+      fmt::print(stderr, "  {} fitted to the input's ({} points, {:.3f} s)\n",
+                 a.normals && a.colours ? "normals and colours" : a.normals ? "normals" : "colours", thousands(a.samples), a.seconds);
+    }
     if (r.dropped_degenerate_faces > 0)
       fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
                  thousands(r.dropped_degenerate_faces));
@@ -437,6 +447,9 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::Range(0, 1000));
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
+  sub->add_flag("--no-attribute-fit", opt->no_attribute_fit,
+                "Keep the normals and colours the collapses left, rather than fit them to the input's at the end "
+                "(least squares over points on both surfaces; positions untouched)");
   add_keep_orientation_flag(sub, opt->keep_orientation);
   add_inverted_faces_option(sub, opt->inverted_faces);
   sub->add_flag("--no-inverted-faces", opt->no_inverted_faces, "The same as --inverted-faces refuse")
@@ -456,7 +469,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   {"--placement", "--preserve-boundary", "--lock-boundary", "--allow-topology-change",
                    "--max-normal-change", "--max-total-normal-change", "--crease-weight", "--attribute-weights",
                    "--lane-faces", "--max-valence", "--refit-passes", "--refit-rms-passes", "--inverted-faces",
-                   "--no-inverted-faces", "--max-hausdorff", "--pixel-error"},
+                   "--no-inverted-faces", "--max-hausdorff", "--pixel-error", "--no-attribute-fit"},
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
     refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",

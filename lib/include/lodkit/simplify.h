@@ -96,6 +96,22 @@ struct RefitOptions {
   double keep_face_below = 0.5;
 };
 
+/// What fit_attributes_to_input() fits.
+struct AttributeFitOptions {
+  bool normals = true;
+  bool colours = true;
+  /// Points sampled on each face of the simplified mesh, on average (larger faces get more); the input
+  /// gives one per face besides.
+  double samples_per_face = 4.0;
+};
+
+/// What fit_attributes_to_input() did.
+struct AttributeFitReport {
+  bool normals = false, colours = false;  ///< what was fitted (present in both meshes, and asked for)
+  long long samples = 0;                  ///< pairs of points, both ways
+  double seconds = 0.0;
+};
+
 /// What refit_to_input() did.
 struct RefitReport {
   /// The largest distance of a sample of either surface from the other, before and after. A sampled
@@ -213,6 +229,11 @@ struct SimplifyOptions {
   /// RMS x0.88, Hausdorff x1.00). Unset: kDefaultRefitRmsPasses where the first stage runs
   /// (refit_passes > 0, given or by default), else none; given alone, the second stage runs alone.
   std::optional<int> refit_rms_passes{};
+  /// Set the output's vertex normals and colours, where input and output have them, to the values that
+  /// best match the input's, once the positions are final (fit_attributes_to_input(); positions and faces
+  /// stay). Not with record_collapses (a progressive mesh's levels keep the collapses' values), nor for
+  /// normals with recompute_normals.
+  bool fit_attributes = true;
 
   bool record_collapses = false;
   /// Called with the fraction done (0..1), at most about 100 times.
@@ -311,6 +332,8 @@ struct SimplifyResult {
   std::optional<RefitReport> refit{};
   /// What hoppe's fit after the collapses did, when one ran (SimplifyOptions::hoppe_fit_passes).
   std::optional<HoppeFitReport> hoppe_fit{};
+  /// What the fit of the normals and colours did, when one ran (SimplifyOptions::fit_attributes).
+  std::optional<AttributeFitReport> attribute_fit{};
 };
 
 /// Numbers per vertex in the attribute layout of `mesh` (normals 3, UVs 2, colours 4, for those present).
@@ -329,7 +352,7 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options = {});
 /// until one fails, then bisecting to 1/16 of the faces, and the output is the coarsest refit level
 /// that passed (result.refit says so). The distance need not grow at every collapse, so a coarser level might pass
 /// too, but the output's own bound is proved (result.within). Unrefit, the output equals simplify()
-/// with refit_passes = 0 (and hoppe_fit_passes = 0) to the same face count, except on meshes large enough for lanes (see
+/// with refit_passes = 0 (and hoppe_fit_passes = 0, fit_attributes = false) to the same face count, except on meshes large enough for lanes (see
 /// lane_faces), whose progressive mesh runs one queue. Slower than simplify(): the bunny (69k faces)
 /// takes 4.0-5.9 s with the refit search (0.5-0.8 s without), igea_loop1 (1M, no refit) 6.2-7.6 s. `error` is
 /// not estimated here (0).
@@ -346,6 +369,16 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
 /// \throw Error for invalid options, or face origins that do not match the faces.
 RefitReport refit_to_input(const Mesh& input, Mesh& simplified, const RefitOptions& options = {},
                            std::span<const Index> face_origin = {});
+
+/// Sets the vertex normals and colours of `simplified`, a simplification of `input`, to the values that
+/// best match the input's (those both meshes have, unless constant over the input; UVs are left, since across a UV seam the nearest
+/// point of the other surface may lie in another chart). Points are sampled on both surfaces, each
+/// pairing the value one surface has there with the other's at its closest point, and one sparse
+/// least-squares solve fits every vertex's values at once, faces interpolating linearly; vertices split
+/// by a seam are fitted apart, so hard edges stay. Normals are renormalised, colours clamped to 0..1.
+/// Positions, faces and vertex order stay. The same result for any thread count.
+/// \throw Error if options.samples_per_face is not positive.
+AttributeFitReport fit_attributes_to_input(const Mesh& input, Mesh& simplified, const AttributeFitOptions& options = {});
 
 /// Refit passes when SimplifyOptions::refit_passes is unset: 10 for quadric on inputs of up to 500,000
 /// faces (on the shared scans, CAD parts and attribute meshes at 10 % and 1 %: Hausdorff x0.66, RMS

@@ -8,7 +8,9 @@
 #include <optional>
 
 #include "core/geometry.h"
+#include "simplify/attribute_fit.h"
 #include "simplify/collapse_engine.h"
+#include "simplify/refit_input.h"
 #include "simplify/target.h"
 
 namespace lodkit {
@@ -80,10 +82,14 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   r.reoriented_faces = turned_faces;
   // The faces keep within the limits the collapses kept: the same turn from their input faces.
   const double total_turn = r.turn_limit_relaxed_at ? detail::kRelaxedTotalTurnDeg : detail::starting_total_turn_deg(options);
+  // The input's tree serves the refit and the attribute fit both.
+  std::optional<detail::RefitInput> fitted_to;
   if (const RefitOptions refit = detail::refit_options(mesh, options, total_turn);
-      detail::refits(refit) && !options.record_collapses && r.collapses > 0)
-    r.refit = refit_to_input(reference, r.mesh, refit, r.face_origin);
+      detail::refits(refit) && !options.record_collapses && r.collapses > 0 &&
+      detail::needs_refit(reference, r.mesh, refit, r.face_origin))
+    r.refit = detail::refit_to_input(fitted_to.emplace(reference, refit.avoid_inverted), r.mesh, refit, r.face_origin);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
+  if (r.collapses > 0) r.attribute_fit = detail::fit_simplified_attributes(reference, fitted_to ? &fitted_to->tree : nullptr, r.mesh, options);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "core/topology.h"
+#include "simplify/attribute_fit.h"
 #include "simplify/refit_input.h"
 #include "simplify/target.h"
 
@@ -131,6 +132,8 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   r.refit = refit;
   r.mesh = std::move(level->mesh);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
+  // (Values only: the proof above holds.)
+  if (hi < pm.max_level()) r.attribute_fit = detail::fit_simplified_attributes(source, nullptr, r.mesh, options);
   r.vertex_origin = std::move(level->vertex_origin);
   r.reoriented_faces = turned_faces;
   r.faces_in = mesh.num_faces();
