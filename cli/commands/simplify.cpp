@@ -492,6 +492,8 @@ Examples:
   lodkit simplify bunny.ply -o bunny_h.ply --ratio 0.1 --method hoppe --hoppe-fit-passes 3   # refit E in 3 passes
   lodkit simplify counter.ply -o counter_lo.ply --ratio 0.01 --max-normal-change 90
   lodkit simplify suzanne_flat.ply -o suzanne_lo.ply --ratio 0.1 --recompute-normals
+  lodkit simplify scan_rgb.ply -o scan_lo.ply --ratio 0.1 --measure   # colours fitted to the input's; their RMS measured
+  lodkit simplify human.obj -o human_lo.obj --ratio 0.1 --no-attribute-fit   # normals as the collapses left them
   lodkit simplify horse.ply -o horse_lo.ply --ratio 0.1 --inverted-faces refuse --measure
   lodkit simplify scan_1M.ply -o scan_lo.ply --ratio 0.1 --inverted-faces allow   # faster; faces may face against the input
   lodkit simplify scan.ply -o scan_fast.ply --ratio 0.1 --refit-passes 0   # 5-8x faster; errors as the collapses left them
