@@ -277,9 +277,15 @@ TEST(CliSimplify, NormalsAndColoursAreFittedUnlessAskedNotTo) {
   EXPECT_EQ(fitted["measured"]["hausdorff"].get<double>(), kept["measured"]["hausdorff"].get<double>());
   r = run(dir, "simplify a.ply -o s.ply --ratio 0.1");
   EXPECT_NE(r.err.find("normals fitted to the input's"), std::string::npos) << r.err;
-  r = run(dir, "simplify a.ply -o d.ply --ratio 0.1 --method schroeder --no-attribute-fit");
-  EXPECT_NE(r.status, 0);
-  EXPECT_NE(r.err.find("--no-attribute-fit"), std::string::npos) << r.err;
+  // schroeder: normals carried and fitted, or positions only.
+  r = run(dir, "simplify a.ply -o d.ply --ratio 0.1 --method schroeder --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["attribute_fit"]["normals"].get<bool>()) << r.out;
+  EXPECT_TRUE(read_mesh((dir / "d.ply").string()).has_normals());
+  r = run(dir, "simplify a.ply -o d.ply --ratio 0.1 --method schroeder --no-attribute-fit --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(r.out).contains("attribute_fit")) << r.out;
+  EXPECT_FALSE(read_mesh((dir / "d.ply").string()).has_normals());
 }
 
 TEST(CliCompare, WithinDecidesAndExitsByTheAnswer) {

@@ -143,6 +143,37 @@ TEST(Decimate, ReportsWhyItStops) {
   EXPECT_NE(r.reason_text.find("8 corner"), std::string::npos) << r.reason_text;
 }
 
+TEST(Decimate, CarriesColoursAndSmoothNormalsAndFitsThem) {
+  // Vertices are welded by position, so an output vertex takes the first input vertex's values there;
+  // the fit then brings them nearer the input's. A painted sphere with smooth normals keeps both; a
+  // box with a normal per side (hard edges, several normals at a position) keeps no normals; off,
+  // positions only.
+  Mesh sphere = test::bumpy_sphere(4, 0.01);
+  sphere.attributes.normals = compute_vertex_normals(sphere);
+  sphere.attributes.colours.resize(sphere.num_vertices(), 4);
+  for (Index v = 0; v < sphere.num_vertices(); ++v)
+    sphere.attributes.colours.row(v) << float(0.5 + 0.4 * sphere.positions(v, 0)), 0.3f, 0.2f, 1.0f;
+  const DecimateResult r = decimate(sphere, {.target_ratio = 0.1});
+  ASSERT_TRUE(r.attribute_fit && r.attribute_fit->normals && r.attribute_fit->colours);
+  ASSERT_TRUE(r.mesh.has_normals() && r.mesh.has_colours());
+  const Comparison c = compare(sphere, r.mesh);
+  EXPECT_LT(*c.colour_rms, 0.01);
+  EXPECT_LT(*c.shading_rms_deg, 5.0);
+  for (Index v = 0; v < r.mesh.num_vertices(); ++v) EXPECT_NEAR(r.mesh.attributes.normals.row(v).norm(), 1.0, 1e-9);
+
+  Mesh box = test::flat_shaded(make_box({.divisions = 4}));
+  const DecimateResult hard = decimate(box, {.target_faces = 12});
+  EXPECT_FALSE(hard.mesh.has_normals());
+  EXPECT_FALSE(hard.attribute_fit);
+
+  DecimateOptions off{.target_ratio = 0.1};
+  off.fit_attributes = false;
+  const DecimateResult plain = decimate(sphere, off);
+  EXPECT_FALSE(plain.mesh.has_normals() || plain.mesh.has_colours() || plain.attribute_fit);
+  EXPECT_EQ(plain.mesh.positions, r.mesh.positions);
+  EXPECT_EQ(plain.mesh.triangles, r.mesh.triangles);
+}
+
 TEST(Decimate, HitsReachableTargetsAndRejectsBadOptions) {
   const Mesh m = test::bumpy_sphere(4, 0.005, 11);
   const DecimateResult r = decimate(m, {.target_faces = 1001});

@@ -162,6 +162,17 @@ void print_measured(const std::optional<Measured>& m) {
     fmt::print(stderr, "  measured: shading normals RMS {:.3f} deg (both directions)\n", *c.shading_rms_deg);
 }
 
+nlohmann::json attribute_fit_json(const AttributeFitReport& a) {
+  return {{"normals", a.normals}, {"colours", a.colours}, {"samples", a.samples}, {"seconds", a.seconds}};
+}
+
+void print_attribute_fit(const std::optional<AttributeFitReport>& fit) {
+  if (!fit) return;
+  fmt::print(stderr, "  {} fitted to the input's ({} points, {:.3f} s)\n",
+             fit->normals && fit->colours ? "normals and colours" : fit->normals ? "normals" : "colours", thousands(fit->samples),
+             fit->seconds);
+}
+
 int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {
   DecimateOptions d;
   d.target_faces = o.faces;
@@ -171,6 +182,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   d.aspect_ratio = o.aspect_ratio;
   d.accumulate_error = o.accumulate_error;
   d.orient_faces = !o.keep_orientation;
+  d.fit_attributes = !o.no_attribute_fit;
   DecimateResult r = decimate(mesh, d);
   if (o.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
@@ -187,6 +199,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
                      {"remaining", {{"simple", c[0]}, {"complex", c[1]}, {"boundary", c[2]}, {"interior_edge", c[3]},
                                     {"corner", c[4]}, {"above_threshold", r.remaining_above_threshold},
                                     {"no_triangulation", r.remaining_no_triangulation}}}};
+    if (r.attribute_fit) j["attribute_fit"] = attribute_fit_json(*r.attribute_fit);
     if (o.measure) put_measured(j, measured);
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
@@ -195,6 +208,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
     print_reoriented(r.reoriented_faces);
     fmt::print(stderr, "  largest removal error {:.6g} ({:.4f}% of the diagonal){}\n", r.error, r.error * pct,
                d.accumulate_error ? ", accumulated" : "");
+    print_attribute_fit(r.attribute_fit);
     if (o.measure) print_measured(measured);
     fmt::print(stderr, "  {}\n", r.reason_text);
   }
@@ -290,9 +304,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
       j["hoppe_fit"] = {{"passes", r.hoppe_fit->passes}, {"energy_before", r.hoppe_fit->energy_before},
                         {"energy_after", r.hoppe_fit->energy_after}, {"points_sent_back", r.hoppe_fit->points_sent_back},
                         {"seconds", r.hoppe_fit->seconds}};
-    if (r.attribute_fit)
-      j["attribute_fit"] = {{"normals", r.attribute_fit->normals}, {"colours", r.attribute_fit->colours},
-                            {"samples", r.attribute_fit->samples}, {"seconds", r.attribute_fit->seconds}};
+    if (r.attribute_fit) j["attribute_fit"] = attribute_fit_json(*r.attribute_fit);
     if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
     if (r.refit)
       j["refit"] = {{"passes", r.refit->passes}, {"steps", r.refit->steps}, {"rms_steps", r.refit->rms_steps},
@@ -339,11 +351,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                  r.hoppe_fit->energy_before, r.hoppe_fit->energy_after,
                  r.hoppe_fit->energy_before > 0 ? 100.0 * (r.hoppe_fit->energy_after / r.hoppe_fit->energy_before - 1) : 0.0,
                  r.hoppe_fit->passes, r.hoppe_fit->passes == 1 ? "" : "es", r.hoppe_fit->points_sent_back, r.hoppe_fit->seconds);
-    if (r.attribute_fit) {
-      const AttributeFitReport& a = *r.attribute_fit;
-      fmt::print(stderr, "  {} fitted to the input's ({} points, {:.3f} s)\n",
-                 a.normals && a.colours ? "normals and colours" : a.normals ? "normals" : "colours", thousands(a.samples), a.seconds);
-    }
+    print_attribute_fit(r.attribute_fit);
     if (r.dropped_degenerate_faces > 0)
       fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
                  thousands(r.dropped_degenerate_faces));
@@ -449,7 +457,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
   sub->add_flag("--no-attribute-fit", opt->no_attribute_fit,
                 "Keep the normals and colours the collapses left, rather than fit them to the input's at the end "
-                "(least squares over points on both surfaces; positions untouched)");
+                "(least squares over points on both surfaces; positions untouched). schroeder: write positions only");
   add_keep_orientation_flag(sub, opt->keep_orientation);
   add_inverted_faces_option(sub, opt->inverted_faces);
   sub->add_flag("--no-inverted-faces", opt->no_inverted_faces, "The same as --inverted-faces refuse")
@@ -469,7 +477,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   {"--placement", "--preserve-boundary", "--lock-boundary", "--allow-topology-change",
                    "--max-normal-change", "--max-total-normal-change", "--crease-weight", "--attribute-weights",
                    "--lane-faces", "--max-valence", "--refit-passes", "--refit-rms-passes", "--inverted-faces",
-                   "--no-inverted-faces", "--max-hausdorff", "--pixel-error", "--no-attribute-fit"},
+                   "--no-inverted-faces", "--max-hausdorff", "--pixel-error"},
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
     refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",

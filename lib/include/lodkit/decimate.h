@@ -12,6 +12,7 @@
 // against the star's average plane. Attributes are not carried: the output has positions only
 // (vertices welded by position).
 #include <lodkit/mesh.h>
+#include <lodkit/simplify.h>
 
 #include <array>
 #include <optional>
@@ -38,6 +39,10 @@ struct DecimateOptions {
   /// First turn the faces of an inconsistently oriented input to agree (orient_consistently(), on a
   /// copy), as simplify() does (SimplifyOptions::orient_faces): a vertex whose faces disagree is complex.
   bool orient_faces = true;
+  /// Give the output the input's vertex colours, and its normals where they are one per position
+  /// (vertices are welded by position, so hard edges and UV seams cannot survive; UVs are dropped),
+  /// then fit both to the input's (fit_attributes_to_input()). Off: positions only.
+  bool fit_attributes = true;
 };
 
 struct DecimateResult {
@@ -52,6 +57,8 @@ struct DecimateResult {
   std::array<Index, 5> remaining_by_class{};
   Index remaining_above_threshold = 0;   ///< removable by class, but too far from plane or line
   Index remaining_no_triangulation = 0;  ///< close enough, but no split met the rules
+  /// What the fit of the normals and colours did, when the output has some (fit_attributes).
+  std::optional<AttributeFitReport> attribute_fit{};
   double seconds = 0.0;
 };
 

@@ -44,7 +44,8 @@ class Decimator {
     std::vector<Index> point_of(static_cast<std::size_t>(mesh.num_vertices()));
     for (Index v = 0; v < mesh.num_vertices(); ++v) {
       Index& p = point_of_class[cls[v]];
-      if (p < 0) p = static_cast<Index>(position_.size()), position_.push_back(mesh.positions.row(v).transpose());
+      if (p < 0)
+        p = static_cast<Index>(position_.size()), position_.push_back(mesh.positions.row(v).transpose()), first_vertex_.push_back(v);
       point_of[v] = p;
     }
     point_faces_.resize(position_.size());
@@ -198,7 +199,8 @@ class Decimator {
 
   double accumulated(Index v) const { return error_[v]; }
 
-  Mesh output() const {
+  /// The mesh left; `vertex_of`: for each of its vertices, the first input vertex at that position.
+  Mesh output(std::vector<Index>& vertex_of) const {
     Mesh m;
     std::vector<Index> id(position_.size(), -1);
     Index nv = 0, nf = 0;
@@ -209,8 +211,9 @@ class Decimator {
           if (id[p] < 0) id[p] = nv++;
       }
     m.positions.resize(nv, 3);
+    vertex_of.assign(static_cast<std::size_t>(nv), -1);
     for (std::size_t p = 0; p < position_.size(); ++p)
-      if (id[p] >= 0) m.positions.row(id[p]) = position_[p].transpose();
+      if (id[p] >= 0) m.positions.row(id[p]) = position_[p].transpose(), vertex_of[id[p]] = first_vertex_[p];
     m.triangles.resize(nf, 3);
     Index row = 0;
     for (std::size_t f = 0; f < face_.size(); ++f)
@@ -289,6 +292,7 @@ class Decimator {
 
   const DecimateOptions& o_;
   std::vector<Eigen::Vector3d> position_;
+  std::vector<Index> first_vertex_;  // per point: the first input vertex there
   std::vector<Tri> face_;
   std::vector<char> alive_;
   std::vector<std::vector<Index>> point_faces_;
@@ -299,6 +303,30 @@ class Decimator {
   Index alive_faces_ = 0;
   double cos_feature_ = 0;
 };
+
+// The output's vertices are the input's points (vertices welded by position), each the first input
+// vertex there: it takes that vertex's colour, and its normal where the input has one normal per
+// position (where it has several, at hard edges, the welding cannot keep them, and no normals are
+// written). UVs, split along their seams, are dropped. Then normals and colours are fitted to the
+// input's (fit_attributes_to_input()).
+std::optional<AttributeFitReport> carry_attributes(const Mesh& input, const std::vector<Index>& vertex_of, Mesh& out) {
+  bool normals = input.has_normals();
+  if (normals) {
+    const Eigen::VectorX<Index> cls = position_classes(input);
+    for (Index v = 0; v < input.num_vertices() && normals; ++v)
+      normals = (input.attributes.normals.row(v) - input.attributes.normals.row(cls[v])).norm() <= 1e-9;
+  }
+  const bool colours = input.has_colours();
+  if (!normals && !colours) return std::nullopt;
+  const Index n = out.num_vertices();
+  if (normals) out.attributes.normals.resize(n, 3);
+  if (colours) out.attributes.colours.resize(n, 4);
+  for (Index i = 0; i < n; ++i) {
+    if (normals) out.attributes.normals.row(i) = input.attributes.normals.row(vertex_of[i]);
+    if (colours) out.attributes.colours.row(i) = input.attributes.colours.row(vertex_of[i]);
+  }
+  return fit_attributes_to_input(input, out);
+}
 
 }  // namespace
 
@@ -344,7 +372,8 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
   for (int k = 32; k >= 0; --k) thresholds.push_back(max_error * std::pow(2.0, -0.5 * k));
 
   Mesh turned;
-  Decimator d(detail::oriented(mesh, options.orient_faces, turned, r.reoriented_faces), options);
+  const Mesh& source = detail::oriented(mesh, options.orient_faces, turned, r.reoriented_faces);
+  Decimator d(source, options);
   Star s;
   for (double t : thresholds) {
     for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v) {
@@ -374,7 +403,9 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
     }
   }
 
-  r.mesh = d.output();
+  std::vector<Index> vertex_of;
+  r.mesh = d.output(vertex_of);
+  if (options.fit_attributes) r.attribute_fit = carry_attributes(source, vertex_of, r.mesh);
   r.faces_out = r.mesh.num_faces();
   r.vertices_out = r.mesh.num_vertices();
   r.target_reached = has_target ? r.faces_out <= target : true;
