@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/geometry.h"
+#include "core/interpolate.h"
 #include "metrics/aabb_tree.h"
 #include "metrics/max_distance_bound.h"
 
@@ -131,19 +132,9 @@ struct Measured {
   double shading_deg;  // the angle between the shading normals there (both meshes with normals), else 0
 };
 
-// The vertex colour mesh m interpolates at point p of face f.
-Eigen::Vector4d colour_at(const Mesh& m, Index f, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d w = detail::barycentric(corner(m, f, 0), corner(m, f, 1), corner(m, f, 2), p);
-  Eigen::Vector4d c = Eigen::Vector4d::Zero();
-  for (int k = 0; k < 3; ++k) c += w[k] * m.attributes.colours.row(m.triangles(f, k)).transpose().cast<double>();
-  return c;
-}
-
-// The unit shading normal mesh m interpolates at point p of face f (zero where the corners' cancel).
-Eigen::Vector3d shading_normal_at(const Mesh& m, Index f, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d w = detail::barycentric(corner(m, f, 0), corner(m, f, 1), corner(m, f, 2), p);
-  Eigen::Vector3d n = Eigen::Vector3d::Zero();
-  for (int k = 0; k < 3; ++k) n += w[k] * m.attributes.normals.row(m.triangles(f, k)).transpose().cast<double>();
+// The unit shading normal mesh m interpolates at weights w over face f (zero where the corners' cancel).
+Eigen::Vector3d shading_normal_at(const Mesh& m, Index f, const Eigen::Vector3d& w) {
+  const Eigen::Vector3d n = detail::interpolate(m, f, w, m.attributes.normals);
   const double length = n.norm();
   return length > 0 ? Eigen::Vector3d(n / length) : Eigen::Vector3d::Zero();
 }
@@ -167,9 +158,14 @@ std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh
       const auto hit = tree.closest(set.points[i].position, hint);
       hint = hit.face;
       const SampleSet::Point& p = set.points[i];
-      const double colour = colours ? (colour_at(from, p.face, p.position) - colour_at(to, hit.face, hit.point)).norm() : 0.0;
-      const double shading =
-          normals ? angle_deg(shading_normal_at(from, p.face, p.position), shading_normal_at(to, hit.face, hit.point)) : 0.0;
+      double colour = 0, shading = 0;
+      if (colours || normals) {
+        // The point's weights on its face, and its nearest point's on the other mesh's face.
+        const Eigen::Vector3d w0 = detail::face_weights(from, p.face, p.position), w1 = detail::face_weights(to, hit.face, hit.point);
+        if (colours)
+          colour = (detail::interpolate(from, p.face, w0, from.attributes.colours) - detail::interpolate(to, hit.face, w1, to.attributes.colours)).norm();
+        if (normals) shading = angle_deg(shading_normal_at(from, p.face, w0), shading_normal_at(to, hit.face, w1));
+      }
       // (A face without area has a zero normal, which counts 0 degrees here.)
       const Eigen::Vector3d n0 = face_normal(from, p.face), n1 = face_normal(to, hit.face);
       result[i] = {std::sqrt(hit.squared_distance), std::atan2(n0.cross(n1).norm(), n0.dot(n1)) * 180.0 / std::numbers::pi,

@@ -23,6 +23,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/geometry.h"
+#include "core/interpolate.h"
 #include "metrics/aabb_tree.h"
 #include "simplify/attribute_fit.h"
 
@@ -51,16 +52,11 @@ std::array<Vec, 3> corners(const Mesh& m, Index f) {
           m.positions.row(m.triangles(f, 2)).transpose()};
 }
 
-// Mesh m's values at point p of face f, interpolated.
+// Mesh m's values at point p of face f, interpolated, in the channels' order.
 void values_on(const Mesh& m, const Channels& ch, Index f, const Vec& p, double* out) {
-  const auto c = corners(m, f);
-  const Vec b = detail::barycentric(c[0], c[1], c[2], p);
-  double corner_values[7];
-  std::fill(out, out + ch.count(), 0.0);
-  for (int k = 0; k < 3; ++k) {
-    values_at(m, ch, m.triangles(f, k), corner_values);
-    for (int d = 0; d < ch.count(); ++d) out[d] += b[k] * corner_values[d];
-  }
+  const Vec w = detail::face_weights(m, f, p);
+  if (ch.normals) Eigen::Vector3d::Map(out) = detail::interpolate(m, f, w, m.attributes.normals);
+  if (ch.colours) Eigen::Vector4d::Map(out + 3 * ch.normals) = detail::interpolate(m, f, w, m.attributes.colours);
 }
 
 // One pair: the output face, the weights of its corners at the point, the value the output should have
@@ -163,9 +159,8 @@ AttributeFitReport fit_attributes_to_input(const Mesh& input, const AabbTree& in
       const Vec centroid = (c[0] + c[1] + c[2]) / 3.0;
       const auto hit = output_tree.closest(centroid, hint);
       hint = hit.face;
-      const auto o = corners(simplified, hit.face);
       Pair& pair = pairs[out_samples + i];
-      pair = {hit.face, barycentric(o[0], o[1], o[2], hit.point), {}, double(stride) * triangle_area(c[0], c[1], c[2])};
+      pair = {hit.face, face_weights(simplified, hit.face, hit.point), {}, double(stride) * triangle_area(c[0], c[1], c[2])};
       values_on(input, ch, g, centroid, pair.target.data());
     }
   });
