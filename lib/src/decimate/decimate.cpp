@@ -38,8 +38,8 @@ using Tri = std::array<Index, 3>;
 
 class Decimator {
  public:
-  Decimator(const Mesh& mesh, const DecimateOptions& o) : o_(o) {
-    const Eigen::VectorX<Index> cls = position_classes(mesh);
+  Decimator(const Mesh& mesh, const DecimateOptions& o) : o_(o), position_class_(position_classes(mesh)) {
+    const Eigen::VectorX<Index>& cls = position_class_;
     std::vector<Index> point_of_class(static_cast<std::size_t>(mesh.num_vertices()), -1);
     std::vector<Index> point_of(static_cast<std::size_t>(mesh.num_vertices()));
     for (Index v = 0; v < mesh.num_vertices(); ++v) {
@@ -198,6 +198,8 @@ class Decimator {
   }
 
   double accumulated(Index v) const { return error_[v]; }
+  /// For each input vertex, the first vertex with its position (position_classes()).
+  const Eigen::VectorX<Index>& position_class() const { return position_class_; }
 
   /// The mesh left; `vertex_of`: for each of its vertices, the first input vertex at that position.
   Mesh output(std::vector<Index>& vertex_of) const {
@@ -293,6 +295,7 @@ class Decimator {
   const DecimateOptions& o_;
   std::vector<Eigen::Vector3d> position_;
   std::vector<Index> first_vertex_;  // per point: the first input vertex there
+  Eigen::VectorX<Index> position_class_;
   std::vector<Tri> face_;
   std::vector<char> alive_;
   std::vector<std::vector<Index>> point_faces_;
@@ -309,13 +312,12 @@ class Decimator {
 // position (where it has several, at hard edges, the welding cannot keep them, and no normals are
 // written). UVs, split along their seams, are dropped. Then normals and colours are fitted to the
 // input's (fit_attributes_to_input()).
-std::optional<AttributeFitReport> carry_attributes(const Mesh& input, const std::vector<Index>& vertex_of, Mesh& out) {
+// `cls`: the input's position classes (position_classes()).
+std::optional<AttributeFitReport> carry_attributes(const Mesh& input, const Eigen::VectorX<Index>& cls,
+                                                   const std::vector<Index>& vertex_of, Mesh& out) {
   bool normals = input.has_normals();
-  if (normals) {
-    const Eigen::VectorX<Index> cls = position_classes(input);
-    for (Index v = 0; v < input.num_vertices() && normals; ++v)
-      normals = (input.attributes.normals.row(v) - input.attributes.normals.row(cls[v])).norm() <= 1e-9;
-  }
+  for (Index v = 0; v < input.num_vertices() && normals; ++v)
+    normals = (input.attributes.normals.row(v) - input.attributes.normals.row(cls[v])).norm() <= 1e-9;
   const bool colours = input.has_colours();
   if (!normals && !colours) return std::nullopt;
   const Index n = out.num_vertices();
@@ -405,7 +407,7 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
 
   std::vector<Index> vertex_of;
   r.mesh = d.output(vertex_of);
-  if (options.fit_attributes) r.attribute_fit = carry_attributes(source, vertex_of, r.mesh);
+  if (options.fit_attributes) r.attribute_fit = carry_attributes(source, d.position_class(), vertex_of, r.mesh);
   r.faces_out = r.mesh.num_faces();
   r.vertices_out = r.mesh.num_vertices();
   r.target_reached = has_target ? r.faces_out <= target : true;
