@@ -24,11 +24,32 @@ const std::vector<std::string>& all_methods() {
   return names;
 }
 
+void carry_attributes(const Mesh& input, PeerRun& run) {
+  if (run.vertex_origin.empty()) return;
+  const Attributes& from = input.attributes;
+  Attributes& to = run.mesh.attributes;
+  const auto n = static_cast<Index>(run.vertex_origin.size());
+  if (input.has_normals()) to.normals.resize(n, 3);
+  if (input.has_uvs()) to.uvs.resize(n, 2);
+  if (input.has_colours()) to.colours.resize(n, 4);
+  for (Index i = 0; i < n; ++i) {
+    const Index v = run.vertex_origin[static_cast<std::size_t>(i)];
+    if (input.has_normals()) to.normals.row(i) = from.normals.row(v);
+    if (input.has_uvs()) to.uvs.row(i) = from.uvs.row(v);
+    if (input.has_colours()) to.colours.row(i) = from.colours.row(v);
+  }
+}
+
 PeerRun run_method(const std::string& method, const Mesh& mesh, Index target) {
-  if (method == "meshopt") return run_meshoptimizer(mesh, target, false);
-  if (method == "meshopt-sloppy") return run_meshoptimizer(mesh, target, true);
-  if (method == "openmesh") return run_openmesh(mesh, target);
-  if (method == "cgal") return run_cgal(mesh, target);
+  // The peers see positions only; their outputs carry the attributes of the input vertices they kept.
+  auto carried = [&](PeerRun run) {
+    carry_attributes(mesh, run);
+    return run;
+  };
+  if (method == "meshopt") return carried(run_meshoptimizer(mesh, target, false));
+  if (method == "meshopt-sloppy") return carried(run_meshoptimizer(mesh, target, true));
+  if (method == "openmesh") return carried(run_openmesh(mesh, target));
+  if (method == "cgal") return carried(run_cgal(mesh, target));
   const auto t0 = std::chrono::steady_clock::now();
   if (method == "pm") {
     // The progressive-mesh path: build the stream (quadric collapses), then extract the level with

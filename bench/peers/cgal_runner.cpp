@@ -16,8 +16,11 @@ PeerRun run_cgal(const Mesh& mesh, Index target_faces) {
   namespace SMS = CGAL::Surface_mesh_simplification;
   SMesh sm;
   std::vector<SMesh::Vertex_index> vi;
-  for (Index v = 0; v < mesh.num_vertices(); ++v)
+  auto origin = sm.add_property_map<SMesh::Vertex_index, Index>("v:origin", -1).first;  // kept by collect_garbage
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
     vi.push_back(sm.add_vertex({mesh.positions(v, 0), mesh.positions(v, 1), mesh.positions(v, 2)}));
+    origin[vi.back()] = v;
+  }
   for (Index f = 0; f < mesh.num_faces(); ++f)
     sm.add_face(vi[mesh.triangles(f, 0)], vi[mesh.triangles(f, 1)], vi[mesh.triangles(f, 2)]);  // null if not manifold
   const auto t0 = std::chrono::steady_clock::now();
@@ -28,9 +31,11 @@ PeerRun run_cgal(const Mesh& mesh, Index target_faces) {
   PeerRun run;
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   run.mesh.positions.resize(static_cast<Index>(sm.number_of_vertices()), 3);
+  run.vertex_origin.resize(sm.number_of_vertices());
   for (auto v : sm.vertices()) {
     const auto& p = sm.point(v);
     run.mesh.positions.row(static_cast<Index>(v.idx())) << p.x(), p.y(), p.z();
+    run.vertex_origin[v.idx()] = origin[v];
   }
   run.mesh.triangles.resize(static_cast<Index>(sm.number_of_faces()), 3);
   for (auto f : sm.faces()) {

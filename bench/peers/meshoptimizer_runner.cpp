@@ -28,8 +28,12 @@ PeerRun run_meshoptimizer(const Mesh& mesh, Index target_faces, bool sloppy) {
   for (std::size_t i = 0; i < n; ++i)
     if (remap[out[i]] < 0) remap[out[i]] = nv++;
   run.mesh.positions.resize(nv, 3);
+  run.vertex_origin.resize(static_cast<std::size_t>(nv));
   for (std::size_t v = 0; v < remap.size(); ++v)
-    if (remap[v] >= 0) run.mesh.positions.row(remap[v]) = mesh.positions.row(static_cast<Index>(v));
+    if (remap[v] >= 0) {
+      run.mesh.positions.row(remap[v]) = mesh.positions.row(static_cast<Index>(v));
+      run.vertex_origin[static_cast<std::size_t>(remap[v])] = static_cast<Index>(v);
+    }
   run.mesh.triangles.resize(static_cast<Index>(n / 3), 3);
   for (std::size_t i = 0; i < n; ++i) run.mesh.triangles(static_cast<Index>(i / 3), static_cast<int>(i % 3)) = remap[out[i]];
   return run;

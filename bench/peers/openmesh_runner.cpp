@@ -13,8 +13,12 @@ PeerRun run_openmesh(const Mesh& mesh, Index target_faces) {
   using OMesh = OpenMesh::TriMesh_ArrayKernelT<>;
   OMesh om;
   std::vector<OMesh::VertexHandle> vh;
-  for (Index v = 0; v < mesh.num_vertices(); ++v)
+  OpenMesh::VPropHandleT<Index> origin;  // survives the collapses and the garbage collection
+  om.add_property(origin);
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
     vh.push_back(om.add_vertex(OMesh::Point(float(mesh.positions(v, 0)), float(mesh.positions(v, 1)), float(mesh.positions(v, 2)))));
+    om.property(origin, vh.back()) = v;
+  }
   for (Index f = 0; f < mesh.num_faces(); ++f)
     om.add_face(vh[mesh.triangles(f, 0)], vh[mesh.triangles(f, 1)], vh[mesh.triangles(f, 2)]);  // complex faces are skipped
   const auto t0 = std::chrono::steady_clock::now();
@@ -30,8 +34,11 @@ PeerRun run_openmesh(const Mesh& mesh, Index target_faces) {
   PeerRun run;
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   run.mesh.positions.resize(static_cast<Index>(om.n_vertices()), 3);
-  for (auto v : om.vertices())
+  run.vertex_origin.resize(om.n_vertices());
+  for (auto v : om.vertices()) {
     for (int k = 0; k < 3; ++k) run.mesh.positions(v.idx(), k) = om.point(v)[k];
+    run.vertex_origin[static_cast<std::size_t>(v.idx())] = om.property(origin, v);
+  }
   run.mesh.triangles.resize(static_cast<Index>(om.n_faces()), 3);
   for (auto f : om.faces()) {
     int k = 0;
