@@ -184,4 +184,18 @@ void print_reoriented(Index faces) {
                "(--keep-orientation leaves them)\n", thousands(faces));
 }
 
+nlohmann::json attribute_fit_json(const AttributeFitReport& fit) {
+  return {{"normals", fit.normals}, {"colours", fit.colours}, {"samples", fit.samples}, {"seconds", fit.seconds}};
+}
+
+void print_attribute_fit(const AttributeFitReport& fit) {
+  if (!fit.normals && !fit.colours) {
+    fmt::print(stderr, "  attribute fit: nothing to fit (no normals or colours, or constant over the input)\n");
+    return;
+  }
+  fmt::print(stderr, "  {} fitted to the input's ({} points, {:.3f} s)\n",
+             fit.normals && fit.colours ? "normals and colours" : fit.normals ? "normals" : "colours", thousands(fit.samples),
+             fit.seconds);
+}
+
 }  // namespace lodkit::cli

@@ -3,6 +3,7 @@
 // summary lines on stderr, and the subcommand registry.
 #include <lodkit/inspect.h>
 #include <lodkit/io.h>
+#include <lodkit/simplify.h>
 
 #include <CLI/CLI.hpp>
 #include <functional>
@@ -78,5 +79,10 @@ CLI::Option* add_inverted_faces_option(CLI::App* app, std::optional<std::string>
 CLI::Option* add_keep_orientation_flag(CLI::App* app, bool& keep);
 /// The summary's line on faces turned to agree on orientation (nothing when none were).
 void print_reoriented(Index faces);
+
+/// The attribute fit's report as JSON, and its summary line ("nothing to fit" when neither normals nor
+/// colours were: none in the output, or constant over the input).
+nlohmann::json attribute_fit_json(const AttributeFitReport& fit);
+void print_attribute_fit(const AttributeFitReport& fit);
 
 }  // namespace lodkit::cli

@@ -756,6 +756,50 @@ TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
     EXPECT_NE(run(dir, cmd).out.find("Example"), std::string::npos) << cmd;
 }
 
+TEST(CliPm, ExtractFitsNormalsAndColoursWhenAsked) {
+  // A level keeps each collapse's values; --fit-attributes fits them to the finest level's, as simplify
+  // fits its output's: the same faces and positions, lower shading and colour errors, and in input order
+  // exactly simplify's output without the refit.
+  test::ScratchDir dir("cli-pm-attribute-fit");
+  Mesh a = test::bumpy_sphere(3, 0.03);
+  a.attributes.normals = compute_vertex_normals(a);
+  a.attributes.colours.resize(a.num_vertices(), 4);
+  for (Index v = 0; v < a.num_vertices(); ++v)
+    a.attributes.colours.row(v) << float(0.5 + 0.45 * a.positions(v, 0)), float(0.5 + 0.45 * a.positions(v, 2)), 0.25f, 1.0f;
+  write_mesh(a, (dir / "a.ply").string());
+  ASSERT_EQ(run(dir, "pm build a.ply -o a.pm").status, 0);
+  CliRun r = run(dir, "pm extract a.pm -o kept.ply --faces 300 --input-order --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(r.out).contains("attribute_fit")) << r.out;
+  r = run(dir, "pm extract a.pm -o fitted.ply --faces 300 --input-order --fit-attributes --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(j.contains("attribute_fit")) << r.out;
+  EXPECT_TRUE(j["attribute_fit"]["normals"].get<bool>());
+  EXPECT_TRUE(j["attribute_fit"]["colours"].get<bool>());
+  const Mesh kept = read_mesh(dir / "kept.ply"), fitted = read_mesh(dir / "fitted.ply");
+  ASSERT_EQ(fitted.num_faces(), j["faces"].get<Index>());
+  EXPECT_TRUE(fitted.positions == kept.positions && fitted.triangles == kept.triangles);
+  const Comparison before = compare(a, kept), after = compare(a, fitted);
+  ASSERT_TRUE(before.shading_rms_deg && after.shading_rms_deg && before.colour_rms && after.colour_rms);
+  EXPECT_LT(*after.shading_rms_deg, 0.8 * *before.shading_rms_deg);
+  EXPECT_LT(*after.colour_rms, 0.8 * *before.colour_rms);
+  r = run(dir, fmt::format("simplify a.ply -o s.ply --faces {} --refit-passes 0", fitted.num_faces()));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Mesh simplified = read_mesh(dir / "s.ply");
+  EXPECT_TRUE(simplified.positions == fitted.positions && simplified.triangles == fitted.triangles);
+  EXPECT_TRUE(simplified.attributes.normals == fitted.attributes.normals);
+  EXPECT_TRUE(simplified.attributes.colours == fitted.attributes.colours);
+  // The summary says what was fitted; without normals or colours, that there was nothing to fit.
+  EXPECT_NE(run(dir, "pm extract a.pm -o x.ply --faces 300 --fit-attributes").err.find("normals and colours fitted"),
+            std::string::npos);
+  write_mesh(test::bumpy_sphere(3, 0.03), (dir / "plain.ply").string());
+  ASSERT_EQ(run(dir, "pm build plain.ply -o plain.pm").status, 0);
+  r = run(dir, "pm extract plain.pm -o x.ply --faces 300 --fit-attributes");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("nothing to fit"), std::string::npos) << r.err;
+}
+
 TEST(CliPm, FlatShadedInputNamesAndTakesDropNormals) {
   // The normals of a flat-shaded mesh make every edge a seam: no collapse, so no splits. The build
   // says so and names --drop-normals; with it the stream spans the shape's levels.

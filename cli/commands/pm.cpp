@@ -31,7 +31,7 @@ struct PmCliOptions {
   std::optional<double> ratio, pixel_error, alpha, max_error;
   double distance = 10.0, fov = 60.0, viewport = 1080.0;
   int frames = 0;
-  bool input_order = false, certified = false;
+  bool input_order = false, certified = false, fit_attributes = false;
   std::optional<std::string> prove_with;  // extract: the mesh the stream was built from
   std::optional<Index> rows;
 };
@@ -210,9 +210,9 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   if (o.prove_with && !o.max_error && !o.pixel_error)
     throw Error("pm extract: --prove-with needs an error budget: --max-error or --pixel-error");
   // Progressive read: only the blocks the chosen level needs (the input order comes after them all). A
-  // proof may check any level: it reads them all.
+  // proof may check any level, and the attribute fit needs the finest: they read them all.
   PmReadOptions ro;
-  if (!o.input_order && !o.prove_with) {
+  if (!o.input_order && !o.prove_with && !o.fit_attributes) {
     ro.max_faces = o.faces;
     ro.max_ratio = o.ratio;
     ro.max_error = o.max_error;
@@ -240,7 +240,14 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   } else {
     level = choose_level(o, r, why);
   }
-  const ExtractedLevel e = extract_level(r.pm, level, o.input_order ? VertexOrder::Input : VertexOrder::Stream);
+  ExtractedLevel e = extract_level(r.pm, level, o.input_order ? VertexOrder::Input : VertexOrder::Stream);
+  std::optional<AttributeFitReport> fit;
+  if (o.fit_attributes) {
+    // The finest level is the input (in input order where the stream keeps it): the level's normals and
+    // colours fitted to it, as simplify fits its output's.
+    const Mesh finest = extract_level(r.pm, r.pm.max_level(), VertexOrder::Input).mesh;
+    fit = fit_attributes_to_input(finest, e.mesh);
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_output(e.mesh, o.output, o.format, WriteOptions{}, o.input);
   const double bound = r.pm.level_error[static_cast<std::size_t>(level)];
@@ -253,6 +260,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
     // (Under a proof the level is usually between measured ones, whose borrowed value would only mislead.)
     if (measured && !proof) j["measured_error"] = measured_error;
     if (proof) j["proved_bound"] = proof->bound, j["checks"] = proof->checks;
+    if (fit) j["attribute_fit"] = attribute_fit_json(*fit);
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
     fmt::print(stderr, "pm extract: level {} of {}: {} faces, {} vertices, error bound {:.6g}{} ({}); read {} bytes, {:.1f} ms\n",
@@ -261,6 +269,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
                : measured ? fmt::format(", measured {:.6g}", measured_error) : "",
                why,
                thousands(static_cast<long long>(r.bytes_read)), 1000 * seconds);
+    if (fit) print_attribute_fit(*fit);
     // Budgets met by the bound alone usually pick levels far finer than a viewer needs: say so once.
     if (!measured && (o.pixel_error || o.max_error) && !o.certified && !o.prove_with)
       fmt::print(stderr, "  note: {} holds no measured errors, so the guaranteed bound chose the level (4-50x the measured "
@@ -374,14 +383,19 @@ Examples:
                       "coarsest found whose distance to it is proved within the budget, checking levels between the "
                       "stored ones (reads the whole file)")
       ->excludes("--certified");
+  extract->add_flag("--fit-attributes", opt->fit_attributes,
+                    "Fit the level's normals and colours to the finest level's, as simplify does (reads the whole "
+                    "file); without it they are the stream's own, each collapse's kept values");
   extract->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   extract->footer(R"(pixels = error * viewport / (2 * d * tan(fov / 2)), d = distance - bounding radius.
 The error is the level's measured distance to the input when the stream was built with --measure
 (unless --certified), else its guaranteed bound, which is 4-50 times larger on the bunny.
-Only the blocks the chosen level needs are read (all of them with --input-order).
+Only the blocks the chosen level needs are read (all of them with --input-order, --prove-with or
+--fit-attributes).
 Examples:
   lodkit pm extract bunny.pm -o bunny_1k.ply --faces 1000
   lodkit pm extract bunny.pm -o half.obj --ratio 0.5 --input-order
+  lodkit pm extract human.pm -o human_2k.ply --faces 2000 --fit-attributes   # shading as simplify's
   lodkit pm extract bunny.pm -o far.ply --pixel-error 0.5 --distance 2 --fov 45 --viewport 1440
   lodkit pm extract bunny.pm -o seen.ply --pixel-error 1 --distance 2 --prove-with bunny.ply)");
 

@@ -162,17 +162,6 @@ void print_measured(const std::optional<Measured>& m) {
     fmt::print(stderr, "  measured: shading normals RMS {:.3f} deg (both directions)\n", *c.shading_rms_deg);
 }
 
-nlohmann::json attribute_fit_json(const AttributeFitReport& a) {
-  return {{"normals", a.normals}, {"colours", a.colours}, {"samples", a.samples}, {"seconds", a.seconds}};
-}
-
-void print_attribute_fit(const std::optional<AttributeFitReport>& fit) {
-  if (!fit) return;
-  fmt::print(stderr, "  {} fitted to the input's ({} points, {:.3f} s)\n",
-             fit->normals && fit->colours ? "normals and colours" : fit->normals ? "normals" : "colours", thousands(fit->samples),
-             fit->seconds);
-}
-
 int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {
   DecimateOptions d;
   d.target_faces = o.faces;
@@ -208,7 +197,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
     print_reoriented(r.reoriented_faces);
     fmt::print(stderr, "  largest removal error {:.6g} ({:.4f}% of the diagonal){}\n", r.error, r.error * pct,
                d.accumulate_error ? ", accumulated" : "");
-    print_attribute_fit(r.attribute_fit);
+    if (r.attribute_fit) print_attribute_fit(*r.attribute_fit);
     if (o.measure) print_measured(measured);
     fmt::print(stderr, "  {}\n", r.reason_text);
   }
@@ -351,7 +340,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                  r.hoppe_fit->energy_before, r.hoppe_fit->energy_after,
                  r.hoppe_fit->energy_before > 0 ? 100.0 * (r.hoppe_fit->energy_after / r.hoppe_fit->energy_before - 1) : 0.0,
                  r.hoppe_fit->passes, r.hoppe_fit->passes == 1 ? "" : "es", r.hoppe_fit->points_sent_back, r.hoppe_fit->seconds);
-    print_attribute_fit(r.attribute_fit);
+    if (r.attribute_fit) print_attribute_fit(*r.attribute_fit);
     if (r.dropped_degenerate_faces > 0)
       fmt::print(stderr, "  dropped {} degenerate faces of the input (corners not three distinct points)\n",
                  thousands(r.dropped_degenerate_faces));
