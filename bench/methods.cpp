@@ -16,14 +16,8 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-}  // namespace
-
-const std::vector<std::string>& all_methods() {
-  static const std::vector<std::string> names{"quadric", "hoppe",          "edge-length", "schroeder", "pm",
-                                              "meshopt", "meshopt-sloppy", "openmesh",    "cgal"};
-  return names;
-}
-
+// The input's vertex normals, UVs and colours, each output vertex taking its origin's: what a peer's
+// output carries, being input vertices. Nothing when `run.vertex_origin` is empty.
 void carry_attributes(const Mesh& input, PeerRun& run) {
   if (run.vertex_origin.empty()) return;
   const Attributes& from = input.attributes;
@@ -38,6 +32,14 @@ void carry_attributes(const Mesh& input, PeerRun& run) {
     if (input.has_uvs()) to.uvs.row(i) = from.uvs.row(v);
     if (input.has_colours()) to.colours.row(i) = from.colours.row(v);
   }
+}
+
+}  // namespace
+
+const std::vector<std::string>& all_methods() {
+  static const std::vector<std::string> names{"quadric", "hoppe",          "edge-length", "schroeder", "pm",
+                                              "meshopt", "meshopt-sloppy", "openmesh",    "cgal"};
+  return names;
 }
 
 PeerRun run_method(const std::string& method, const Mesh& mesh, Index target) {

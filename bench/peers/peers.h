@@ -12,13 +12,9 @@ struct PeerRun {
   Mesh mesh;
   double seconds = 0;  ///< the simplification call only, not the conversions around it
   /// Per output vertex, the input vertex it is (moved, for the quadric peers): the peers keep input
-  /// vertices, so their output carries those vertices' normals, UVs and colours (see carry_attributes()).
+  /// vertices, so their output carries those vertices' normals, UVs and colours (run_method() copies them).
   std::vector<Index> vertex_origin;
 };
-
-/// The input's vertex normals, UVs and colours, each output vertex taking its origin's: what a peer's
-/// output carries, being a subset of the input's vertices. Nothing when `run.vertex_origin` is empty.
-void carry_attributes(const Mesh& input, PeerRun& run);
 
 /// meshoptimizer's meshopt_simplify (attribute-free, error limit off), or meshopt_simplifySloppy.
 PeerRun run_meshoptimizer(const Mesh& mesh, Index target_faces, bool sloppy);
