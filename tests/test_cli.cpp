@@ -258,6 +258,30 @@ TEST(CliCompare, ShadingNormalsAreReportedWhenBothMeshesHaveThem) {
   EXPECT_FALSE(nlohmann::json::parse(run(dir, "compare a.ply plain.ply --json").out).contains("shading_rms_deg"));
 }
 
+TEST(CliCompare, UvDeviationIsReportedWhenBothMeshesHaveUvs) {
+  // A UV sphere and its simplification: a UV distance within charts, most of the area compared, and
+  // UV weights that lower it; in JSON, in the text and in simplify --measure. No UVs, no figure.
+  test::ScratchDir dir("cli-compare-uv");
+  ASSERT_EQ(run(dir, "generate sphere -o a.obj --uvs").status, 0);
+  CliRun r = run(dir, "simplify a.obj -o s.obj --ratio 0.2 --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const double measured = nlohmann::json::parse(r.out)["measured"]["uv_rms"].get<double>();
+  r = run(dir, "compare a.obj s.obj --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_DOUBLE_EQ(j["uv_rms"].get<double>(), measured);
+  EXPECT_GT(measured, 0.0);
+  EXPECT_LT(j["a_to_b"]["uv_max"].get<double>(), 0.5);  // none compared across the u = 0 / 1 seam, 1 apart
+  EXPECT_GT(j["a_to_b"]["uv_compared"].get<double>(), 0.9);
+  EXPECT_GT(j["b_to_a"]["uv_compared"].get<double>(), 0.9);
+  r = run(dir, "simplify a.obj -o w.obj --ratio 0.2 --attribute-weights 0,1,0 --measure --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LT(nlohmann::json::parse(r.out)["measured"]["uv_rms"].get<double>(), measured);
+  EXPECT_NE(run(dir, "compare a.obj s.obj").out.find("UV deviation"), std::string::npos);
+  ASSERT_EQ(run(dir, "generate sphere -o plain.obj").status, 0);
+  EXPECT_FALSE(nlohmann::json::parse(run(dir, "compare a.obj plain.obj --json").out).contains("uv_rms"));
+}
+
 TEST(CliSimplify, NormalsAndColoursAreFittedUnlessAskedNotTo) {
   test::ScratchDir dir("cli-simplify-attribute-fit");
   Mesh a = test::bumpy_sphere(3, 0.03);

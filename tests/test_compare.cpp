@@ -8,6 +8,7 @@
 
 #include <tbb/global_control.h>
 
+#include "core/uv_charts.h"
 #include "metrics/aabb_tree.h"
 #include "test_util.h"
 
@@ -48,6 +49,87 @@ TEST(Compare, ShadingNormalsAreComparedWhereBothMeshesHaveThem) {
   EXPECT_FALSE(compare(a, plain).shading_rms_deg);
   EXPECT_FALSE(compare(plain, a).b_to_a.shading_max_deg);
   EXPECT_FALSE(compare(a, b).colour_rms);
+}
+
+TEST(Compare, UvsAreComparedWhereBothMeshesHaveThem) {
+  // A grid's UVs shifted by (0.01, 0.02): that far apart everywhere, both ways, over all the area.
+  const Mesh a = make_grid({.divisions_x = 8, .divisions_y = 8, .uvs = true});
+  ASSERT_TRUE(a.has_uvs());
+  Mesh b = a;
+  b.attributes.uvs.col(0).array() += 0.01;
+  b.attributes.uvs.col(1).array() += 0.02;
+  const Comparison c = compare(a, b);
+  const double apart = std::hypot(0.01, 0.02);
+  ASSERT_TRUE(c.uv_rms && c.a_to_b.uv_max && c.b_to_a.uv_rms);
+  EXPECT_NEAR(*c.uv_rms, apart, 1e-6);
+  EXPECT_NEAR(*c.a_to_b.uv_max, apart, 1e-6);
+  EXPECT_NEAR(*c.b_to_a.uv_max, apart, 1e-6);
+  EXPECT_DOUBLE_EQ(c.a_to_b.uv_compared, 1.0);
+  EXPECT_DOUBLE_EQ(c.b_to_a.uv_compared, 1.0);
+  EXPECT_NEAR(*compare(a, a).uv_rms, 0.0, 1e-12);
+  Mesh plain = a;
+  plain.attributes.uvs.resize(0, 2);
+  EXPECT_FALSE(compare(a, plain).uv_rms);
+  EXPECT_FALSE(compare(plain, a).b_to_a.uv_max);
+}
+
+TEST(Compare, UvsAreNotComparedAcrossASeam) {
+  // A torus's UVs wrap both ways: one chart that meets itself along two seams. The same torus turned
+  // about its axis by 1/200 of a turn is 0.005 apart in u everywhere, except that a point next to the
+  // u seam has its nearest point across it, about 1 apart: such points are left out, not counted.
+  const Mesh a = make_torus({.major_segments = 64, .minor_segments = 16, .uvs = true});
+  ASSERT_TRUE(a.has_uvs());
+  Mesh b = a;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(2 * std::numbers::pi / 200, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  for (Index v = 0; v < b.num_vertices(); ++v) b.positions.row(v) = (turn * b.positions.row(v).transpose()).transpose();
+  const Comparison c = compare(a, b);
+  ASSERT_TRUE(c.uv_rms);
+  EXPECT_NEAR(*c.uv_rms, 0.005, 2e-4);
+  EXPECT_LT(*c.a_to_b.uv_max, 0.006);
+  EXPECT_LT(*c.b_to_a.uv_max, 0.006);
+  // What is left out is the strip the turn carries across the seam: 1/200 of the area, each way.
+  EXPECT_NEAR(c.a_to_b.uv_compared, 1.0 - 1.0 / 200, 2e-3);
+  EXPECT_NEAR(c.b_to_a.uv_compared, 1.0 - 1.0 / 200, 2e-3);
+}
+
+TEST(UvCharts, SeamsPartChartsAndNormalSeamsDoNot) {
+  // A grid cut down the middle of its atlas: the right half's UVs moved by 0.5 in u, so the vertices
+  // on x = 0 are split into two with other UVs. Two charts, each half's faces in one. Splitting a
+  // vertex by its normals alone (same UVs) parts nothing; a torus's wrapping UVs are one chart.
+  Mesh grid = make_grid({.divisions_x = 4, .divisions_y = 2, .uvs = true});
+  const Index before = grid.num_vertices();
+  std::vector<Index> twin(static_cast<std::size_t>(before), -1);
+  auto right = [&](Index f) { return grid.positions.row(grid.triangles(f, 0)).x() + grid.positions.row(grid.triangles(f, 1)).x() +
+                                         grid.positions.row(grid.triangles(f, 2)).x() > 0; };
+  for (Index f = 0; f < grid.num_faces(); ++f) {
+    if (!right(f)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Index v = grid.triangles(f, k);
+      if (std::abs(grid.positions(v, 0)) > 1e-12) continue;
+      if (twin[v] < 0) {
+        twin[v] = grid.num_vertices();
+        grid.positions.conservativeResize(twin[v] + 1, 3);
+        grid.positions.row(twin[v]) = grid.positions.row(v);
+        grid.attributes.uvs.conservativeResize(twin[v] + 1, 2);
+        grid.attributes.uvs.row(twin[v]) = grid.attributes.uvs.row(v);
+      }
+      grid.triangles(f, k) = twin[v];
+    }
+  }
+  for (Index v = 0; v < grid.num_vertices(); ++v)
+    if (grid.positions(v, 0) > 1e-12 || v >= before) grid.attributes.uvs(v, 0) += 0.5;
+  const std::vector<Index> charts = detail::uv_charts(grid);
+  ASSERT_EQ(charts.size(), static_cast<std::size_t>(grid.num_faces()));
+  for (Index f = 0; f < grid.num_faces(); ++f) EXPECT_EQ(charts[f] != charts[0], right(f) != right(0)) << f;
+  EXPECT_EQ(*std::max_element(charts.begin(), charts.end()), 1);
+  // The same cut with the UVs left alone (a normal seam, say): one chart.
+  Mesh same = grid;
+  for (Index v = 0; v < same.num_vertices(); ++v)
+    if (same.positions(v, 0) > 1e-12 || v >= before) same.attributes.uvs(v, 0) -= 0.5;
+  const std::vector<Index> one = detail::uv_charts(same);
+  EXPECT_EQ(*std::max_element(one.begin(), one.end()), 0);
+  const std::vector<Index> torus = detail::uv_charts(make_torus({.major_segments = 12, .minor_segments = 6, .uvs = true}));
+  EXPECT_EQ(*std::max_element(torus.begin(), torus.end()), 0);
 }
 
 TEST(Compare, ColoursAreComparedWhereBothMeshesHaveThem) {

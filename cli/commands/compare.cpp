@@ -56,6 +56,7 @@ nlohmann::json directed_json(const DirectedDistance& d, const Comparison& c) {
           {"normal_deviation_max_deg", d.normal_deviation_max_deg}, {"samples", d.samples}};
   if (d.colour_rms) j["colour_rms"] = *d.colour_rms, j["colour_max"] = *d.colour_max;
   if (d.shading_rms_deg) j["shading_rms_deg"] = *d.shading_rms_deg, j["shading_max_deg"] = *d.shading_max_deg;
+  if (d.uv_rms) j["uv_rms"] = *d.uv_rms, j["uv_max"] = *d.uv_max, j["uv_compared"] = d.uv_compared;
   return j;
 }
 
@@ -63,7 +64,7 @@ nlohmann::json directed_json(const DirectedDistance& d, const Comparison& c) {
 
 Command add_compare_command(CLI::App& app, const GlobalOptions&) {
   auto opt = std::make_shared<CompareCliOptions>();
-  CLI::App* sub = app.add_subcommand("compare", "Distance between two surfaces (Hausdorff, mean, RMS, normals, colours)");
+  CLI::App* sub = app.add_subcommand("compare", "Distance between two surfaces (Hausdorff, mean, RMS, normals, colours, UVs)");
   sub->add_option("a", opt->a, "First mesh (percentages refer to its bounding-box diagonal)")->required();
   sub->add_option("b", opt->b, "Second mesh")->required();
   sub->add_option("--samples", opt->samples, "Face samples per direction (default 10 per face of the larger mesh)")
@@ -95,6 +96,7 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
                                {"a_to_b", directed_json(c.a_to_b, c)}, {"b_to_a", directed_json(c.b_to_a, c)}};
               if (c.colour_rms) j["colour_rms"] = *c.colour_rms;
               if (c.shading_rms_deg) j["shading_rms_deg"] = *c.shading_rms_deg;
+              if (c.uv_rms) j["uv_rms"] = *c.uv_rms;
               fmt::print("{}\n", j.dump(2));
               return 0;
             }
@@ -120,6 +122,11 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
             if (c.shading_rms_deg)
               fmt::print("{:<22} {:>14.3f} deg (RMS), A->B {:.1f}, B->A {:.1f} deg (max)\n", "shading normals",
                          *c.shading_rms_deg, *c.a_to_b.shading_max_deg, *c.b_to_a.shading_max_deg);
+            if (c.uv_rms)
+              fmt::print("{:<22} {:>14.6g} (RMS), A->B {:.6g}, B->A {:.6g} (max); within charts: {:.1f} % and {:.1f} % of "
+                         "the area\n",
+                         "UV deviation", *c.uv_rms, *c.a_to_b.uv_max, *c.b_to_a.uv_max, 100 * c.a_to_b.uv_compared,
+                         100 * c.b_to_a.uv_compared);
             fmt::print("{:<22} {:>14} ({} + {})\n", "samples", thousands(c.a_to_b.samples + c.b_to_a.samples),
                        thousands(c.a_to_b.samples), thousands(c.b_to_a.samples));
             fmt::print("{:<22} {:>14.6g}\n", "diagonal of A", c.diagonal);

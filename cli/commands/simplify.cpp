@@ -146,6 +146,7 @@ void put_measured(nlohmann::json& j, const std::optional<Measured>& m) {
                    {"rms_percent", c.percent(c.rms)}, {"inverted_faces", m->inverted_faces}};
   if (c.colour_rms) j["measured"]["colour_rms"] = *c.colour_rms;
   if (c.shading_rms_deg) j["measured"]["shading_rms_deg"] = *c.shading_rms_deg;
+  if (c.uv_rms) j["measured"]["uv_rms"] = *c.uv_rms;
 }
 
 void print_measured(const std::optional<Measured>& m) {
@@ -160,6 +161,7 @@ void print_measured(const std::optional<Measured>& m) {
   if (c.colour_rms) fmt::print(stderr, "  measured: colour RMS {:.6g} (both directions; channels 0..1)\n", *c.colour_rms);
   if (c.shading_rms_deg)
     fmt::print(stderr, "  measured: shading normals RMS {:.3f} deg (both directions)\n", *c.shading_rms_deg);
+  if (c.uv_rms) fmt::print(stderr, "  measured: UV RMS {:.6g} (both directions, within charts)\n", *c.uv_rms);
 }
 
 int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, const Mesh& mesh, double diagonal) {

@@ -49,6 +49,14 @@ struct DirectedDistance {
   /// interpolates at a sample and at its closest point (degrees; 90 where an interpolated normal
   /// vanishes), area-weighted over the face samples like `rms`, and the largest over all samples.
   std::optional<double> shading_rms_deg{}, shading_max_deg{};
+  /// When both meshes have UVs: the distance between the texture coordinates each surface interpolates
+  /// at a sample and at its closest point (UV units), area-weighted like `rms`, and the largest. Compared
+  /// within a chart only (faces joined where their UVs are continuous): across a UV seam the atlas jumps,
+  /// so a sample whose closest point lies in a chart other than its own's counterpart (the chart most of
+  /// its chart's area lands on, or that lands most on it) is left out; `uv_compared` is the fraction of
+  /// the area compared.
+  std::optional<double> uv_rms{}, uv_max{};
+  double uv_compared = 0.0;
   long long samples = 0;
 };
 
@@ -64,6 +72,8 @@ struct Comparison {
   std::optional<double> colour_rms{};
   /// Both directions' shading_rms_deg combined as `rms` is (when both meshes have vertex normals).
   std::optional<double> shading_rms_deg{};
+  /// Both directions' uv_rms combined as `rms` is (when both meshes have UVs).
+  std::optional<double> uv_rms{};
   /// The direction whose maximum is the Hausdorff distance (A -> B on a tie): its max_at is where to look.
   const DirectedDistance& farther() const { return a_to_b.max >= b_to_a.max ? a_to_b : b_to_a; }
   double percent(double value) const { return diagonal > 0 ? 100.0 * value / diagonal : 0.0; }

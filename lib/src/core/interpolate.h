@@ -1,5 +1,5 @@
 #pragma once
-// Vertex values (normals, colours) interpolated over a mesh's face (not public API).
+// Vertex values (normals, UVs, colours) interpolated over a mesh's face (not public API).
 #include <lodkit/mesh.h>
 
 #include "core/geometry.h"

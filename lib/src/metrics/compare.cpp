@@ -7,12 +7,14 @@
 #include <fmt/format.h>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <vector>
 
 #include "core/geometry.h"
 #include "core/interpolate.h"
+#include "core/uv_charts.h"
 #include "metrics/aabb_tree.h"
 #include "metrics/max_distance_bound.h"
 
@@ -130,6 +132,8 @@ struct Measured {
   Index nearest;  // the face of the other mesh nearest the point
   double colour;  // the colour difference there (both meshes coloured), else 0
   double shading_deg;  // the angle between the shading normals there (both meshes with normals), else 0
+  double uv;           // the distance between the UVs there (both meshes with UVs), else 0
+  bool uv_near;        // its UV and its closest point's compare (detail::uv_comparable())
 };
 
 // The unit shading normal mesh m interpolates at weights w over face f (zero where the corners' cancel).
@@ -152,33 +156,68 @@ std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh
   std::vector<Measured> result(set.points.size());
   const bool colours = from.has_colours() && to.has_colours();
   const bool normals = from.has_normals() && to.has_normals();
+  const bool uvs = from.has_uvs() && to.has_uvs();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.points.size(), 1024), [&](const auto& range) {
     Index hint = -1;
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       const auto hit = tree.closest(set.points[i].position, hint);
       hint = hit.face;
       const SampleSet::Point& p = set.points[i];
-      double colour = 0, shading = 0;
-      if (colours || normals) {
+      double colour = 0, shading = 0, uv = 0;
+      bool uv_near = false;
+      if (colours || normals || uvs) {
         // The point's weights on its face, and its nearest point's on the other mesh's face.
         const Eigen::Vector3d w0 = detail::face_weights(from, p.face, p.position), w1 = detail::face_weights(to, hit.face, hit.point);
         if (colours)
           colour = (detail::interpolate(from, p.face, w0, from.attributes.colours) - detail::interpolate(to, hit.face, w1, to.attributes.colours)).norm();
         if (normals) shading = angle_deg(shading_normal_at(from, p.face, w0), shading_normal_at(to, hit.face, w1));
+        if (uvs) {
+          const Eigen::Vector2d here = detail::interpolate(from, p.face, w0, from.attributes.uvs);
+          uv = (here - detail::interpolate(to, hit.face, w1, to.attributes.uvs)).norm();
+          uv_near = detail::uv_comparable(from, p.face, to, hit.face, here);
+        }
       }
       // (A face without area has a zero normal, which counts 0 degrees here.)
       const Eigen::Vector3d n0 = face_normal(from, p.face), n1 = face_normal(to, hit.face);
       result[i] = {std::sqrt(hit.squared_distance), std::atan2(n0.cross(n1).norm(), n0.dot(n1)) * 180.0 / std::numbers::pi,
-                   hit.face, colour, shading};
+                   hit.face, colour, shading, uv, uv_near};
     }
   });
   return result;
 }
 
+// Texture coordinates compare within a chart only: across a UV seam the atlas jumps to another piece,
+// and a point whose nearest point lies there has no UV distance to speak of. Which chart of `to`
+// stands for which of `from` is found by vote: a pair of charts counts when most of one's face samples
+// (by area) land on the other. A chart may also meet itself along a seam (a torus cut open once, UVs
+// that wrap around): a point there counts only when its UV lies near the nearest face's UV triangle.
+// Fills the direction's UV figures.
+void measure_uvs(const SampleSet& sampled, const std::vector<Measured>& measured, std::span<const Index> from_charts,
+                 std::span<const Index> to_charts, DirectedDistance& d) {
+  detail::ChartPartners charts;
+  for (const SampleSet::Sample& s : sampled.samples)
+    if (s.weight > 0) charts.vote(from_charts[sampled.points[s.point].face], to_charts[measured[s.point].nearest], s.weight);
+  charts.settle();
+  double weight = 0, compared = 0, uv2 = 0, uv_max = 0;
+  for (const SampleSet::Sample& s : sampled.samples) {
+    const Measured& m = measured[s.point];
+    weight += s.weight;
+    if (!m.uv_near || !charts.partners(from_charts[sampled.points[s.point].face], to_charts[m.nearest])) continue;
+    compared += s.weight;
+    uv2 += s.weight * m.uv * m.uv;
+    uv_max = std::max(uv_max, m.uv);
+  }
+  d.uv_rms = compared > 0 ? std::sqrt(uv2 / compared) : 0.0;
+  d.uv_max = uv_max;
+  d.uv_compared = weight > 0 ? compared / weight : 0.0;
+}
+
 DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh& to, const detail::AabbTree& tree,
-                          std::span<const std::array<Index, 3>> to_neighbours, const CompareOptions& o) {
+                          std::span<const std::array<Index, 3>> to_neighbours, std::span<const Index> from_charts,
+                          std::span<const Index> to_charts, const CompareOptions& o) {
   const std::vector<Measured> measured = measure(sampled, from, to, tree);
   DirectedDistance d;
+  if (from.has_uvs() && to.has_uvs()) measure_uvs(sampled, measured, from_charts, to_charts, d);
   double weight = 0, sum = 0, sum2 = 0, angle_sum = 0, colour2 = 0, colour_max = 0, shading2 = 0, shading_max = 0;
   std::uint32_t farthest = 0;
   for (const SampleSet::Sample& s : sampled.samples) {
@@ -243,6 +282,8 @@ Comparison combine(const Mesh& a, DirectedDistance a_to_b, DirectedDistance b_to
   if (c.a_to_b.shading_rms_deg && c.b_to_a.shading_rms_deg)
     c.shading_rms_deg =
         std::sqrt(0.5 * (*c.a_to_b.shading_rms_deg * *c.a_to_b.shading_rms_deg + *c.b_to_a.shading_rms_deg * *c.b_to_a.shading_rms_deg));
+  if (c.a_to_b.uv_rms && c.b_to_a.uv_rms)
+    c.uv_rms = std::sqrt(0.5 * (*c.a_to_b.uv_rms * *c.a_to_b.uv_rms + *c.b_to_a.uv_rms * *c.b_to_a.uv_rms));
   const auto box = bounding_box(a);
   c.diagonal = box.isEmpty() ? 0.0 : box.diagonal().norm();
   return c;
@@ -259,13 +300,18 @@ struct CompareReference::State {
   detail::AabbTree tree;
   SampleSet sampled;
   std::vector<std::array<Index, 3>> neighbours;  // detail::face_neighbours(mesh)
+  std::vector<Index> charts;                     // detail::uv_charts(mesh), when it has UVs
 };
+
+// The UV charts of a mesh with UVs (none without: nothing to compare).
+std::vector<Index> charts_of(const Mesh& m) { return m.has_uvs() ? detail::uv_charts(m) : std::vector<Index>{}; }
 
 CompareReference::CompareReference(const Mesh& reference, long long face_samples, const CompareOptions& options) {
   if (reference.num_faces() == 0) throw Error("compare: the first mesh has no faces");
   check_samples(face_samples);
   state_ = std::make_unique<State>(State{reference, face_samples, options, detail::AabbTree(reference),
-                                         sample_surface(reference, face_samples), detail::face_neighbours(reference)});
+                                         sample_surface(reference, face_samples), detail::face_neighbours(reference),
+                                         charts_of(reference)});
 }
 
 CompareReference::~CompareReference() = default;
@@ -278,10 +324,15 @@ Comparison CompareReference::compare(const Mesh& other, std::optional<long long>
   // Side by side: each direction's serial part (the other's tree, the other's samples) overlaps the
   // other's parallel queries.
   DirectedDistance to_other, to_reference;
+  const std::vector<Index> other_charts = s.mesh.has_uvs() ? charts_of(other) : std::vector<Index>{};
   tbb::parallel_invoke(
-      [&] { to_other = directed(s.mesh, s.sampled, other, detail::AabbTree(other), detail::face_neighbours(other), s.options); },
       [&] {
-        to_reference = directed(other, sample_surface(other, other_samples), s.mesh, s.tree, s.neighbours, s.options);
+        to_other = directed(s.mesh, s.sampled, other, detail::AabbTree(other), detail::face_neighbours(other), s.charts,
+                            other_charts, s.options);
+      },
+      [&] {
+        to_reference = directed(other, sample_surface(other, other_samples), s.mesh, s.tree, s.neighbours, other_charts,
+                                s.charts, s.options);
       });
   return combine(s.mesh, to_other, to_reference);
 }
@@ -292,11 +343,14 @@ Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options) 
   const long long samples = options.samples.value_or(default_face_samples(std::max(a.num_faces(), b.num_faces())));
   check_samples(samples);
   // One direction at a time, so that only one surface's samples are held at once.
-  const auto one_way = [&](const Mesh& from, const Mesh& to) {
-    return directed(from, sample_surface(from, samples), to, detail::AabbTree(to), detail::face_neighbours(to), options);
+  const bool uvs = a.has_uvs() && b.has_uvs();
+  const std::vector<Index> a_charts = uvs ? charts_of(a) : std::vector<Index>{}, b_charts = uvs ? charts_of(b) : std::vector<Index>{};
+  const auto one_way = [&](const Mesh& from, std::span<const Index> from_charts, const Mesh& to, std::span<const Index> to_charts) {
+    return directed(from, sample_surface(from, samples), to, detail::AabbTree(to), detail::face_neighbours(to), from_charts,
+                    to_charts, options);
   };
-  const DirectedDistance a_to_b = one_way(a, b);
-  return combine(a, a_to_b, one_way(b, a));
+  const DirectedDistance a_to_b = one_way(a, a_charts, b, b_charts);
+  return combine(a, a_to_b, one_way(b, b_charts, a, a_charts));
 }
 
 Index count_flipped_faces(const Mesh& reference, const Mesh& mesh) {
