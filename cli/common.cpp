@@ -185,17 +185,21 @@ void print_reoriented(Index faces) {
 }
 
 nlohmann::json attribute_fit_json(const AttributeFitReport& fit) {
-  return {{"normals", fit.normals}, {"colours", fit.colours}, {"samples", fit.samples}, {"seconds", fit.seconds}};
+  return {{"normals", fit.normals}, {"colours", fit.colours}, {"uvs", fit.uvs}, {"samples", fit.samples}, {"seconds", fit.seconds}};
 }
 
 void print_attribute_fit(const AttributeFitReport& fit) {
-  if (!fit.normals && !fit.colours) {
-    fmt::print(stderr, "  attribute fit: nothing to fit (no normals or colours, or constant over the input)\n");
+  std::vector<std::string> what;
+  if (fit.normals) what.push_back("normals");
+  if (fit.uvs) what.push_back("UVs");
+  if (fit.colours) what.push_back("colours");
+  if (what.empty()) {
+    fmt::print(stderr, "  attribute fit: nothing to fit (no normals, UVs or colours, or constant over the input)\n");
     return;
   }
-  fmt::print(stderr, "  {} fitted to the input's ({} points, {:.3f} s)\n",
-             fit.normals && fit.colours ? "normals and colours" : fit.normals ? "normals" : "colours", thousands(fit.samples),
-             fit.seconds);
+  std::string list = what[0];
+  for (std::size_t i = 1; i < what.size(); ++i) list += (i + 1 == what.size() ? " and " : ", ") + what[i];
+  fmt::print(stderr, "  {} fitted to the input's ({} points, {:.3f} s)\n", list, thousands(fit.samples), fit.seconds);
 }
 
 }  // namespace lodkit::cli

@@ -80,7 +80,7 @@ CLI::Option* add_keep_orientation_flag(CLI::App* app, bool& keep);
 /// The summary's line on faces turned to agree on orientation (nothing when none were).
 void print_reoriented(Index faces);
 
-/// The attribute fit's report as JSON, and its summary line ("nothing to fit" when neither normals nor
+/// The attribute fit's report as JSON, and its summary line ("nothing to fit" when no normals, UVs or
 /// colours were: none in the output, or constant over the input).
 nlohmann::json attribute_fit_json(const AttributeFitReport& fit);
 void print_attribute_fit(const AttributeFitReport& fit);

@@ -384,7 +384,7 @@ Examples:
                       "stored ones (reads the whole file)")
       ->excludes("--certified");
   extract->add_flag("--fit-attributes", opt->fit_attributes,
-                    "Fit the level's normals and colours to the finest level's, as simplify does (reads the whole "
+                    "Fit the level's normals, UVs and colours to the finest level's, as simplify does (reads the whole "
                     "file); without it they are the stream's own, each collapse's kept values");
   extract->add_flag("--json", opt->json, "Print the result as JSON on stdout");
   extract->footer(R"(pixels = error * viewport / (2 * d * tan(fov / 2)), d = distance - bounding radius.

@@ -447,7 +447,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
   sub->add_flag("--no-attribute-fit", opt->no_attribute_fit,
-                "Keep the normals and colours the collapses left, rather than fit them to the input's at the end "
+                "Keep the normals, UVs and colours the collapses left, rather than fit them to the input's at the end "
                 "(least squares over points on both surfaces; positions untouched). schroeder: write positions only");
   add_keep_orientation_flag(sub, opt->keep_orientation);
   add_inverted_faces_option(sub, opt->inverted_faces);

@@ -100,6 +100,9 @@ struct RefitOptions {
 struct AttributeFitOptions {
   bool normals = true;
   bool colours = true;
+  /// UVs within their charts: a point counts only where its closest point on the other mesh lies in
+  /// the same piece of the atlas (as compare()'s uv_rms measures them).
+  bool uvs = true;
   /// Points sampled on each face of the simplified mesh, on average (larger faces get more); the input
   /// gives one per face besides.
   double samples_per_face = 4.0;
@@ -107,7 +110,7 @@ struct AttributeFitOptions {
 
 /// What fit_attributes_to_input() did.
 struct AttributeFitReport {
-  bool normals = false, colours = false;  ///< what was fitted (present in both meshes, and asked for)
+  bool normals = false, colours = false, uvs = false;  ///< what was fitted (present in both meshes, and asked for)
   long long samples = 0;                  ///< pairs of points, both ways
   double seconds = 0.0;
 };
@@ -229,7 +232,7 @@ struct SimplifyOptions {
   /// RMS x0.88, Hausdorff x1.00). Unset: kDefaultRefitRmsPasses where the first stage runs
   /// (refit_passes > 0, given or by default), else none; given alone, the second stage runs alone.
   std::optional<int> refit_rms_passes{};
-  /// Set the output's vertex normals and colours, where input and output have them, to the values that
+  /// Set the output's vertex normals, colours and UVs, where input and output have them, to the values that
   /// best match the input's, once the positions are final (fit_attributes_to_input(); positions and faces
   /// stay). Not with record_collapses (a progressive mesh's levels keep the collapses' values), nor for
   /// normals with recompute_normals.
@@ -332,7 +335,7 @@ struct SimplifyResult {
   std::optional<RefitReport> refit{};
   /// What hoppe's fit after the collapses did, when one ran (SimplifyOptions::hoppe_fit_passes).
   std::optional<HoppeFitReport> hoppe_fit{};
-  /// What the fit of the normals and colours did, when one ran (SimplifyOptions::fit_attributes).
+  /// What the fit of the normals, colours and UVs did, when one ran (SimplifyOptions::fit_attributes).
   std::optional<AttributeFitReport> attribute_fit{};
 };
 
@@ -370,12 +373,14 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
 RefitReport refit_to_input(const Mesh& input, Mesh& simplified, const RefitOptions& options = {},
                            std::span<const Index> face_origin = {});
 
-/// Sets the vertex normals and colours of `simplified`, a simplification of `input`, to the values that
-/// best match the input's (those both meshes have, unless constant over the input; UVs are left, since across a UV seam the nearest
-/// point of the other surface may lie in another chart). Points are sampled on both surfaces, each
-/// pairing the value one surface has there with the other's at its closest point, and one sparse
-/// least-squares solve fits every vertex's values at once, faces interpolating linearly; vertices split
-/// by a seam are fitted apart, so hard edges stay. Normals are renormalised, colours clamped to 0..1.
+/// Sets the vertex normals, colours and UVs of `simplified`, a simplification of `input`, to the values
+/// that best match the input's (those both meshes have, unless constant over the input). Points are
+/// sampled on both surfaces, each pairing the value one surface has there with the other's at its
+/// closest point, and one sparse least-squares solve fits every vertex's values at once, faces
+/// interpolating linearly; vertices split by a seam are fitted apart, so hard edges stay. Normals are
+/// renormalised, colours clamped to 0..1. UVs have a solve of their own, over the pairs within a chart
+/// (as compare() measures them: across a UV seam the other side belongs to another piece of the
+/// atlas), and a vertex on a UV seam keeps its UVs, so that its twins across the seam still meet it.
 /// Positions, faces and vertex order stay. The same result for any thread count.
 /// \throw Error if options.samples_per_face is not positive.
 AttributeFitReport fit_attributes_to_input(const Mesh& input, Mesh& simplified, const AttributeFitOptions& options = {});
