@@ -78,7 +78,9 @@ TEST(HoppeScalar, UvSeamsHoldAndTheShapeWithThem) {
       polar |= std::abs(uv[1] - 0.5) > 0.35;
       lo = std::min(lo, double(uv[0])), hi = std::max(hi, double(uv[0]));
     }
-    if (!polar) EXPECT_LT(hi - lo, 0.5) << "face " << f;
+    if (!polar) {
+      EXPECT_LT(hi - lo, 0.5) << "face " << f;
+    }
   }
   // The shape holds: the UVs do not outweigh the distances.
   EXPECT_LT(compare(sphere, r.mesh).rms, 1.25 * compare(sphere, plain.mesh).rms);

@@ -657,7 +657,7 @@ class HoppeCost final : public CostModel {
         const std::size_t k = static_cast<std::size_t>(dims_);
         const double* x = &values[(k + 2) * j];
         auto& list = face_values_[best_face];
-        landed.push_back({best_face, list.size(), {}});
+        landed.push_back({best_face, list.size(), Eigen::Vector3d::Zero()});
         list.insert(list.end(), x, x + k + 2);  // its distance is set below, once the values are placed
       }
     }
