@@ -139,17 +139,9 @@ TEST(AttributeFit, UvsComeCloserWithinChartsAndTheSeamStillMeets) {
   EXPECT_LT(after, 0.8 * before) << before << " -> " << after;
   EXPECT_EQ(fitted.positions, carried.positions);
   EXPECT_EQ(fitted.triangles, carried.triangles);
-  Index seam = 0;
-  for (Index i = 0; i < fitted.num_vertices(); ++i) {
-    if (fitted.attributes.uvs(i, 0) != 0.0) continue;
-    ++seam;
-    Index twins = 0;
-    for (Index j = 0; j < fitted.num_vertices(); ++j)
-      twins += fitted.positions.row(i) == fitted.positions.row(j) && fitted.attributes.uvs(j, 0) == 1.0 &&
-               fitted.attributes.uvs(j, 1) == fitted.attributes.uvs(i, 1);
-    EXPECT_GE(twins, 1) << "vertex " << i;
-  }
-  EXPECT_GE(seam, 2);
+  const test::SeamTwins seam = test::u_seam_twins(fitted);
+  EXPECT_GE(seam.seam, 2);
+  EXPECT_EQ(seam.without_twin, 0);
   Mesh kept = carried;
   EXPECT_FALSE(fit_attributes_to_input(sphere, kept, {.uvs = false}).uvs);
   EXPECT_EQ(kept.attributes.uvs, carried.attributes.uvs);

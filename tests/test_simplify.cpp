@@ -273,17 +273,10 @@ TEST(Simplify, UvSeamsStayAligned) {
   }
   // The u = 0 / u = 1 seam is intact: every seam vertex on one side has its twin, at the same
   // position with the same v, on the other.
-  Index seam_vertices = 0;
-  for (Index i = 0; i < m.num_vertices(); ++i) {
-    if (m.attributes.uvs(i, 0) != 0.0) continue;
-    ++seam_vertices;
-    Index twins = 0;
-    for (Index j = 0; j < m.num_vertices(); ++j)
-      twins += m.positions.row(i) == m.positions.row(j) && m.attributes.uvs(j, 0) == 1.0 &&
-               m.attributes.uvs(j, 1) == m.attributes.uvs(i, 1);
-    EXPECT_EQ(twins, 1) << "vertex " << i;
-  }
-  EXPECT_GE(seam_vertices, 2);
+  const test::SeamTwins seam = test::u_seam_twins(m);
+  EXPECT_GE(seam.seam, 2);
+  EXPECT_EQ(seam.without_twin, 0);
+  EXPECT_EQ(seam.with_more_twins, 0);
   EXPECT_TRUE(inspect(m).closed);
 }
 

@@ -88,4 +88,19 @@ Mesh flat_shaded(const Mesh& mesh) {
   return flat;
 }
 
+SeamTwins u_seam_twins(const Mesh& m) {
+  SeamTwins out;
+  for (Index i = 0; i < m.num_vertices(); ++i) {
+    if (m.attributes.uvs(i, 0) != 0.0) continue;
+    ++out.seam;
+    Index twins = 0;
+    for (Index j = 0; j < m.num_vertices(); ++j)
+      twins += m.positions.row(i) == m.positions.row(j) && m.attributes.uvs(j, 0) == 1.0 &&
+               m.attributes.uvs(j, 1) == m.attributes.uvs(i, 1);
+    out.without_twin += twins == 0;
+    out.with_more_twins += twins > 1;
+  }
+  return out;
+}
+
 }  // namespace lodkit::test

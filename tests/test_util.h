@@ -37,4 +37,12 @@ Mesh flat_shaded(const Mesh& mesh);
 /// nearer the far side than its own, where the plain flip checks let some face the wrong way.
 Mesh thin_lens();
 
+/// The u = 0 / u = 1 seam of an equirectangular UV sphere (make_uv_sphere with uvs), checked: its
+/// vertices with u = 0, and how many of them have no twin, or more than one, at their point with
+/// u = 1 and the same v. The seam meets where every one has exactly one.
+struct SeamTwins {
+  Index seam = 0, without_twin = 0, with_more_twins = 0;
+};
+SeamTwins u_seam_twins(const Mesh& m);
+
 }  // namespace lodkit::test
