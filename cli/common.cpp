@@ -152,6 +152,7 @@ nlohmann::json to_json(const MeshReport& r) {
   j["volume"] = r.volume ? json(*r.volume) : json(nullptr);
   j["attributes"] = {{"normals", r.has_normals}, {"uvs", r.has_uvs}, {"colours", r.has_colours},
                      {"face_colours", r.has_face_colours}};
+  if (r.uv_charts) j["uv_charts"] = *r.uv_charts;
   return j;
 }
 

@@ -91,6 +91,37 @@ TEST(Inspect, SeamsAreWeldedForTopology) {
   EXPECT_EQ(*r.genus, 0);
   EXPECT_EQ(r.euler_characteristic, 2);
   EXPECT_EQ(r.welded_vertices, 12 * 5 + 2);
+  // One piece of atlas: the u = 0 / 1 seam and the split poles part no faces from the rest.
+  EXPECT_EQ(r.uv_charts, Index(1));
+}
+
+TEST(Inspect, UvChartsAreThePiecesOfTheAtlas) {
+  // A box whose six sides each have their own UVs: six charts; without UVs, none reported.
+  Mesh box = make_box({});
+  EXPECT_FALSE(inspect(box).uv_charts);
+  box.attributes.uvs.resize(box.num_vertices(), 2);
+  for (Index v = 0; v < box.num_vertices(); ++v) box.attributes.uvs.row(v) << double(v % 2), double((v / 2) % 2);
+  // Split every vertex per face, each corner its own UV: no two faces share UVs at an edge unless the
+  // two triangles of one side do.
+  Mesh split;
+  split.positions.resize(3 * box.num_faces(), 3);
+  split.triangles.resize(box.num_faces(), 3);
+  split.attributes.uvs.resize(3 * box.num_faces(), 2);
+  for (Index f = 0; f < box.num_faces(); ++f) {
+    const Eigen::Vector3d n = (box.positions.row(box.triangles(f, 1)) - box.positions.row(box.triangles(f, 0)))
+                                  .cross(box.positions.row(box.triangles(f, 2)) - box.positions.row(box.triangles(f, 0)));
+    int axis = 0;
+    n.cwiseAbs().maxCoeff(&axis);
+    for (int k = 0; k < 3; ++k) {
+      const Index v = 3 * f + k;
+      split.positions.row(v) = box.positions.row(box.triangles(f, k));
+      split.triangles(f, k) = v;
+      // The side's plane coordinates, moved to the side's own place in the atlas.
+      const Eigen::Vector3d p = split.positions.row(v).transpose();
+      split.attributes.uvs.row(v) << p[(axis + 1) % 3] + 2.0 * (axis + 3 * (n[axis] > 0)), p[(axis + 2) % 3];
+    }
+  }
+  EXPECT_EQ(inspect(split).uv_charts, Index(6));
 }
 
 TEST(Inspect, GenusOfATorusAndOfTwoTori) {

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fmt/format.h>
 #include <memory>
+#include <string_view>
 
 #include "common.h"
 
@@ -32,8 +33,12 @@ void print_report(const std::string& input, const MeshReport& r) {
   }
   std::string attrs;
   for (auto [has, name] : {std::pair{r.has_normals, "normals"}, {r.has_uvs, "uvs"},
-                           {r.has_colours, "colours"}, {r.has_face_colours, "face colours"}})
-    if (has) attrs += (attrs.empty() ? "" : ", ") + std::string(name);
+                           {r.has_colours, "colours"}, {r.has_face_colours, "face colours"}}) {
+    if (!has) continue;
+    attrs += (attrs.empty() ? "" : ", ") + std::string(name);
+    if (r.has_uvs && r.uv_charts && std::string_view(name) == "uvs")
+      attrs += fmt::format(" ({} chart{})", thousands(*r.uv_charts), *r.uv_charts == 1 ? "" : "s");
+  }
   line("attributes", attrs.empty() ? "none" : attrs);
   std::string topo = r.closed ? "closed" : "open";
   topo += r.manifold ? ", manifold" : ", NOT manifold";

@@ -44,6 +44,9 @@ struct MeshReport {
   std::optional<double> volume;    ///< signed, when closed and oriented; negative = inside out
 
   bool has_normals = false, has_uvs = false, has_colours = false, has_face_colours = false;
+  /// With UVs: the pieces of the texture atlas, faces joined across every edge whose ends have the same
+  /// UVs on both sides (UV seams part them; what compare() and the attribute fit compare UVs within).
+  std::optional<Index> uv_charts;
 };
 
 MeshReport inspect(const Mesh& mesh);

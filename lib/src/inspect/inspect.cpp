@@ -7,6 +7,7 @@
 #include "core/hash.h"
 #include "core/topology.h"
 #include "core/union_find.h"
+#include "core/uv_charts.h"
 
 namespace lodkit {
 namespace {
@@ -32,6 +33,10 @@ MeshReport inspect(const Mesh& mesh) {
   r.has_uvs = mesh.has_uvs();
   r.has_colours = mesh.has_colours();
   r.has_face_colours = mesh.has_face_colours();
+  if (r.has_uvs && r.faces > 0) {
+    const std::vector<Index> charts = detail::uv_charts(mesh);
+    r.uv_charts = *std::max_element(charts.begin(), charts.end()) + 1;
+  }
   r.bounds = bounding_box(mesh);
   r.diagonal = r.bounds.isEmpty() ? 0.0 : r.bounds.diagonal().norm();
 
