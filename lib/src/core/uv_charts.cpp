@@ -1,10 +1,6 @@
 #include "core/uv_charts.h"
 
-#include <algorithm>
-#include <unordered_map>
-
 #include "core/geometry.h"
-#include "core/union_find.h"
 
 namespace lodkit::detail {
 
@@ -12,25 +8,12 @@ std::vector<Index> uv_charts(const Mesh& mesh) {
   const Index nf = mesh.num_faces();
   const Eigen::VectorX<Index> point = position_classes(mesh);
   UnionFind charts(static_cast<std::size_t>(nf));
-  // Each edge by its points, with the first face that used it and the corner it starts at.
-  std::unordered_map<std::uint64_t, std::pair<Index, int>> first_use;
-  first_use.reserve(static_cast<std::size_t>(3 * nf / 2 + 1));
-  auto corner = [&](Index f, int k) { return mesh.triangles(f, k % 3); };
-  for (Index f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const Index a = point[corner(f, k)], b = point[corner(f, k + 1)];
-      if (a == b) continue;
-      const std::uint64_t key = (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
-      const auto [it, fresh] = first_use.try_emplace(key, f, k);
-      if (fresh) continue;
-      const auto [g, side] = it->second;
-      // The other face's corners at this face's first and second point (the edge may run either way).
-      const bool same_way = point[corner(g, side)] == a;
-      const Index ga = same_way ? corner(g, side) : corner(g, side + 1), gb = same_way ? corner(g, side + 1) : corner(g, side);
-      if (mesh.attributes.uvs.row(corner(f, k)) == mesh.attributes.uvs.row(ga) &&
-          mesh.attributes.uvs.row(corner(f, k + 1)) == mesh.attributes.uvs.row(gb))
-        charts.unite(int(f), int(g));
-    }
+  unite_across_edges(
+      nf, [&](Index f, int k) { return point[mesh.triangles(f, k)]; }, [](Index) { return false; },
+      [&](Index f, int k, Index g, int j) {
+        return mesh.attributes.uvs.row(mesh.triangles(f, k)) == mesh.attributes.uvs.row(mesh.triangles(g, j));
+      },
+      charts);
   std::vector<Index> chart(static_cast<std::size_t>(nf));
   std::unordered_map<int, Index> number;
   for (Index f = 0; f < nf; ++f) chart[f] = number.try_emplace(charts.find(int(f)), Index(number.size())).first->second;

@@ -3,11 +3,42 @@
 // takes to compare two meshes' texture coordinates within them (compare(), the attribute fit).
 #include <lodkit/mesh.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <map>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
+#include "core/union_find.h"
+
 namespace lodkit::detail {
+
+/// Charts of any kind of value (UVs here, all of a wedge's attributes in hoppe's E_scalar): unites in
+/// `sets` (one per face) each face with the first face that used each of its edges, the edge found by
+/// its two points (`point(f, k)` for corner k of face f, either way round), when both ends carry the
+/// same values: `same(f, k, g, j)` for corner k of f and corner j of g at one point. Faces `skip(f)`
+/// names take no part.
+template <typename Point, typename Skip, typename Same>
+void unite_across_edges(Index faces, Point point, Skip skip, Same same, UnionFind& sets) {
+  std::unordered_map<std::uint64_t, std::pair<Index, int>> first_use;  // edge -> face and the corner it starts at
+  first_use.reserve(static_cast<std::size_t>(3 * faces / 2 + 1));
+  for (Index f = 0; f < faces; ++f) {
+    if (skip(f)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Index a = point(f, k), b = point(f, (k + 1) % 3);
+      if (a == b) continue;
+      const std::uint64_t key = (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
+      const auto [it, fresh] = first_use.try_emplace(key, f, k);
+      if (fresh) continue;
+      const auto [g, side] = it->second;
+      // g's corners at this edge's first and second point (the edge may run either way).
+      const bool same_way = point(g, side) == a;
+      const int ga = same_way ? side : (side + 1) % 3, gb = same_way ? (side + 1) % 3 : side;
+      if (same(f, k, g, ga) && same(f, (k + 1) % 3, g, gb)) sets.unite(int(f), int(g));
+    }
+  }
+}
 
 /// Per face of `mesh` (which must have UVs), its chart: faces are joined across every edge whose two
 /// ends sit at the same positions with the same UVs on both sides. A UV seam (the same points, other

@@ -29,6 +29,7 @@
 #include "core/bound_rows.h"
 #include "core/geometry.h"
 #include "core/union_find.h"
+#include "core/uv_charts.h"
 #include "simplify/hoppe_points.h"
 
 namespace lodkit::detail {
@@ -714,21 +715,9 @@ class HoppeCost final : public CostModel {
   // wedges (no attribute seam between them). A face keeps its chart: wedges merge within one.
   void find_charts(const EngineState& s) {
     UnionFind charts(s.face.size());
-    std::unordered_map<std::uint64_t, std::pair<Index, int>> first_use;  // edge -> face and side
-    for (std::size_t f = 0; f < s.face.size(); ++f) {
-      if (s.face_dead[f]) continue;
-      for (int k = 0; k < 3; ++k) {
-        const Index a = s.corner_point(Index(f), k), b = s.corner_point(Index(f), (k + 1) % 3);
-        const auto [it, fresh] = first_use.try_emplace(BoundaryCurves::edge_key(a, b), Index(f), k);
-        if (fresh) continue;
-        const auto [g, side] = it->second;
-        // The same edge, run the other way in a consistent mesh: same wedges at the same points.
-        const Index wa = s.face[f][k], wb = s.face[f][(k + 1) % 3];
-        const Index ga = s.face[g][side], gb = s.face[g][(side + 1) % 3];
-        const bool same = (s.corner_point(g, side) == a) ? (ga == wa && gb == wb) : (ga == wb && gb == wa);
-        if (same) charts.unite(int(f), int(g));
-      }
-    }
+    unite_across_edges(
+        Index(s.face.size()), [&](Index f, int k) { return s.corner_point(f, k); }, [&](Index f) { return s.face_dead[f] != 0; },
+        [&](Index f, int k, Index g, int j) { return s.face[f][k] == s.face[g][j]; }, charts);
     face_chart_.resize(s.face.size());
     for (std::size_t f = 0; f < s.face.size(); ++f) face_chart_[f] = charts.find(int(f));
   }
