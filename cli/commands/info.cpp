@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <fmt/format.h>
 #include <memory>
-#include <string_view>
 
 #include "common.h"
 
@@ -32,13 +31,11 @@ void print_report(const std::string& input, const MeshReport& r) {
                                lo.y(), lo.z(), hi.x(), hi.y(), hi.z(), r.diagonal));
   }
   std::string attrs;
-  for (auto [has, name] : {std::pair{r.has_normals, "normals"}, {r.has_uvs, "uvs"},
-                           {r.has_colours, "colours"}, {r.has_face_colours, "face colours"}}) {
-    if (!has) continue;
-    attrs += (attrs.empty() ? "" : ", ") + std::string(name);
-    if (r.has_uvs && r.uv_charts && std::string_view(name) == "uvs")
-      attrs += fmt::format(" ({} chart{})", thousands(*r.uv_charts), *r.uv_charts == 1 ? "" : "s");
-  }
+  const std::string uvs =
+      r.uv_charts ? fmt::format("uvs ({} chart{})", thousands(*r.uv_charts), *r.uv_charts == 1 ? "" : "s") : "uvs";
+  for (auto [has, name] : {std::pair{r.has_normals, std::string("normals")}, {r.has_uvs, uvs},
+                           {r.has_colours, std::string("colours")}, {r.has_face_colours, std::string("face colours")}})
+    if (has) attrs += (attrs.empty() ? "" : ", ") + name;
   line("attributes", attrs.empty() ? "none" : attrs);
   std::string topo = r.closed ? "closed" : "open";
   topo += r.manifold ? ", manifold" : ", NOT manifold";

@@ -243,7 +243,6 @@ AttributeFitReport fit_attributes_to_input(const Mesh& input, const AabbTree& in
   // Output -> input: the input's value at the closest point.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, area.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
     Index hint = -1;
-    double own[kMostChannels];
     for (std::size_t f = r.begin(); f < r.end(); ++f) {
       std::size_t at = first[f];
       const double weight = area[f] / double(split[f] * split[f]);
@@ -253,10 +252,9 @@ AttributeFitReport fit_attributes_to_input(const Mesh& input, const AabbTree& in
         Pair& pair = pairs[at++];
         pair = {Index(f), bary, {}, weight, hit.face};
         values_on(input, ch, hit.face, hit.point, pair.target.data());
-        if (ch.uvs) {
-          values_on(simplified, ch, Index(f), p, own);
-          pair.uv_near = detail::uv_comparable(simplified, Index(f), input, hit.face, Eigen::Vector2d::Map(own + kUvAt));
-        }
+        if (ch.uvs)
+          pair.uv_near = detail::uv_comparable(simplified, Index(f), input, hit.face,
+                                               detail::interpolate(simplified, Index(f), bary, simplified.attributes.uvs));
       });
     }
   });
