@@ -298,6 +298,34 @@ TEST(AabbTree, FacingAgainstMatchesBruteForceOnCrossingPartsAndSharpEdges) {
   }
 }
 
+// faces_way_within() at the nearest face's distance: whether a face as near faces the normal's way.
+// Points all around a box, so that many lie nearest one of its edges or corners, where faces tie.
+TEST(AabbTree, FacesWayWithinFindsTheFacesTyingAtEdgesAndCorners) {
+  BoxOptions box_options;
+  box_options.divisions = 3;
+  const Mesh box = make_box(box_options);
+  AabbTree tree(box), unprepared(box);
+  tree.prepare_facing();
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0), component(-1.0, 1.0);
+  int ties = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector3d p(coordinate(rng), coordinate(rng), coordinate(rng));
+    const Eigen::Vector3d n(component(rng), component(rng), component(rng));
+    const double d = std::sqrt(brute_closest(box, p).second);
+    bool expected = false, against = false;
+    for (Index f = 0; f < box.num_faces(); ++f) {
+      const double e = (detail::closest_point_on_triangle(p, corner(box, f, 0), corner(box, f, 1), corner(box, f, 2)) - p).norm();
+      const Eigen::Vector3d m = (corner(box, f, 1) - corner(box, f, 0)).cross(corner(box, f, 2) - corner(box, f, 0));
+      if (e <= d + 1e-9) expected |= m.dot(n) > 0, against |= m.dot(n) < 0;
+    }
+    ties += expected && against;  // nearest faces facing both ways: the nearest one alone would not do
+    EXPECT_EQ(tree.faces_way_within(p, n, d * d), expected) << p.transpose() << " / " << n.transpose();
+    EXPECT_EQ(unprepared.faces_way_within(p, n, d * d), expected) << "without prepare_facing()";
+  }
+  EXPECT_GT(ties, 100);
+}
+
 TEST(AabbTree, FacingAgainstHandlesFacesWithoutAreaAndFacesBackToBackPreparedOrNot) {
   // A square twice, once each way (back to back), and a face of no area beside them.
   Mesh m;

@@ -397,6 +397,28 @@ TEST(Compare, BracketsTheMaximumOfASimplifiedSurface) {
   }
 }
 
+// The bench's "flipped faces": a face facing against the input's nearest face counts, but where two
+// input faces coincide facing opposite ways (boxes stacked face to face), the one facing its way is as
+// near, and the face does not count. A mesh measured against itself has none; turned, every face but
+// those on the contact square.
+TEST(FlippedFaces, CountFacesAgainstTheNearestInputFacesAndNoneAgainstThemselves) {
+  BoxOptions options;
+  options.divisions = 6;
+  Mesh lower = make_box(options), upper = make_box(options);
+  upper.positions.col(2).array() += 1.0;  // its bottom lies on the lower box's top, facing down
+  const Mesh stacked = concatenated(lower, upper);
+  EXPECT_EQ(count_flipped_faces(stacked, stacked), 0);
+  Mesh turned = stacked;
+  turned.triangles.col(1).swap(turned.triangles.col(2));
+  const Index contact_square = 2 * options.divisions * options.divisions;  // faces a side
+  EXPECT_EQ(count_flipped_faces(stacked, turned), stacked.num_faces() - 2 * contact_square);
+  // One box turned inside out: the contact square still has faces facing both ways, so only its
+  // other five sides count.
+  Mesh one_turned = concatenated(lower, upper);
+  one_turned.triangles.bottomRows(upper.num_faces()).col(1).swap(one_turned.triangles.bottomRows(upper.num_faces()).col(2));
+  EXPECT_EQ(count_flipped_faces(stacked, one_turned), upper.num_faces() * 5 / 6);
+}
+
 TEST(Compare, RefusesEmptyMeshes) { EXPECT_THROW(compare(Mesh{}, make_box({})), Error); }
 
 }  // namespace

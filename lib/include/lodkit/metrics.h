@@ -139,7 +139,9 @@ class HausdorffChecker {
 };
 
 /// Faces of `mesh` whose normal points against the normal of the face of `reference` nearest to
-/// their centroid: the "flipped faces" of simplification benchmarks.
+/// their centroid: the "flipped faces" of simplification benchmarks. Where several faces are nearest
+/// (two coinciding, facing opposite ways, or two meeting at the edge nearest the centroid), a face
+/// counts only if it faces against all of them.
 Index count_flipped_faces(const Mesh& reference, const Mesh& mesh);
 
 }  // namespace lodkit

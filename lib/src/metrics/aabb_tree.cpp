@@ -27,6 +27,7 @@ constexpr double kReach = 6;
 constexpr double kAngleSlack = 1e-7;   // radians: acos and the sums of angles round
 constexpr double kCosineSlack = 1e-9;  // and cosines
 constexpr double kSideSlack = 1e-6;    // the sines of the side tests, whose axes are floats
+constexpr double kTieSlack = 1e-12;    // of the coordinates' magnitude: faces this much nearer tie
 
 double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {  // unit vectors
   return std::acos(std::clamp(a.dot(b), -1.0, 1.0));
@@ -407,14 +408,33 @@ bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& n
   if (hint >= 0 && !sides_.empty()) return nearest_faces_against(p, normal, normal / length, hint);
   const Hit hit = closest(p, hint);
   hint = hit.face;
-  if (hit.face < 0) return false;
-  if (normals_.empty()) {  // not prepared: the face's own normal
-    const Eigen::Vector3d a = mesh_.positions.row(mesh_.triangles(hit.face, 0)),
-                          b = mesh_.positions.row(mesh_.triangles(hit.face, 1)),
-                          c = mesh_.positions.row(mesh_.triangles(hit.face, 2));
-    return (b - a).cross(c - a).dot(normal) < 0;
+  return hit.face >= 0 && face_normal(hit.face).dot(normal) < 0;
+}
+
+Eigen::Vector3d AabbTree::face_normal(Index f) const {
+  if (!normals_.empty()) return normals_[f];
+  const Eigen::Vector3d a = mesh_.positions.row(mesh_.triangles(f, 0)), b = mesh_.positions.row(mesh_.triangles(f, 1)),
+                        c = mesh_.positions.row(mesh_.triangles(f, 2));
+  return (b - a).cross(c - a);
+}
+
+bool AabbTree::faces_way_within(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, double squared_distance) const {
+  // Equal distances computed from different corners differ by a few roundings of the coordinates.
+  const double slack = kTieSlack * std::max(extent_, p.cwiseAbs().maxCoeff());
+  const double reach = std::sqrt(squared_distance) + slack, bound = reach * reach;
+  bool found = false;
+  const auto visit = [&](int slot, bool) {
+    const Index f = order_[slot];
+    found = face_normal(f).dot(normal) > 0 && (closest_on_face(p, f) - p).squaredNorm() <= bound;
+    return found;
+  };
+  if (sides_.empty()) {
+    descend(p, bound, EnterAll{}, visit);
+  } else {
+    const Eigen::Vector3d against = -normal.normalized();
+    descend(p, bound, entering_unless([&](int i) { return sides_[i].all_same(against); }), visit);
   }
-  return normals_[hit.face].dot(normal) < 0;
+  return found;
 }
 
 }  // namespace lodkit::detail

@@ -68,6 +68,10 @@ class AabbTree {
   /// Closest point to `p` on the faces that face the way of `normal` (positive dot with it); face -1
   /// where none does. Needs prepare_facing().
   Hit closest_facing(const Eigen::Vector3d& p, const Eigen::Vector3d& normal) const;
+  /// Whether a face facing the way of `normal` lies within sqrt(squared_distance) of p, give or take
+  /// the rounding of distances: with the nearest face's distance, whether a face as near faces p's way
+  /// (two faces that coincide facing opposite ways, or meet at the edge nearest p, tie).
+  bool faces_way_within(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, double squared_distance) const;
 
   /// What facing_against() may conclude without a search, for the faces of one leaf: a normal n with
   /// axis . n > min_dot |n|, asked about at a point p with 2 |p - anchor| < clearance, faces the same
@@ -145,6 +149,8 @@ class AabbTree {
   static int leaf_code(const Node& leaf) { return -1 - (leaf.first * 4 + leaf.count - 1); }
   /// The closest point to p on face f.
   Eigen::Vector3d closest_on_face(const Eigen::Vector3d& p, Index f) const;
+  /// Face f's normal: unit where prepare_facing() ran, else its corners' cross product.
+  Eigen::Vector3d face_normal(Index f) const;
   /// Appends the quad of inner node `node`, and those below it; returns its index.
   int build_quad(int node);
   /// Lane `lane` of `quad` as node `node`'s box, in floats rounded outwards.
