@@ -174,6 +174,38 @@ TEST(Decimate, CarriesColoursAndSmoothNormalsAndFitsThem) {
   EXPECT_EQ(plain.mesh.triangles, r.mesh.triangles);
 }
 
+TEST(Decimate, KeepsUvSeamsAsFeatureLinesAndTheirUvsOnEachSide) {
+  // A UV sphere's u = 0 / u = 1 seam runs pole to pole. Seam edges count as feature edges, so a vertex
+  // on the seam goes only along it (the line split keeps it), and each side of the line takes its own
+  // faces' UVs: no face straddles the seam, and every seam vertex has its twin across it.
+  const Mesh sphere = make_uv_sphere({.segments = 64, .rings = 32, .uvs = true});
+  const test::SeamTwins before = test::u_seam_twins(sphere);
+  const DecimateResult r = decimate(sphere, {.target_ratio = 0.25});
+  EXPECT_TRUE(r.target_reached) << r.reason_text;
+  const Mesh& m = r.mesh;
+  ASSERT_TRUE(m.has_uvs());
+  ASSERT_TRUE(r.attribute_fit && r.attribute_fit->uvs);
+  for (Index f = 0; f < m.num_faces(); ++f) {
+    double lo = 1, hi = 0;
+    for (int k = 0; k < 3; ++k) lo = std::min(lo, m.attributes.uvs(m.triangles(f, k), 0)),
+                                hi = std::max(hi, m.attributes.uvs(m.triangles(f, k), 0));
+    EXPECT_LT(hi - lo, 0.5) << "face " << f;
+  }
+  const test::SeamTwins seam = test::u_seam_twins(m);
+  EXPECT_GE(seam.seam, 2);
+  EXPECT_LT(seam.seam, before.seam);  // some went, along the line
+  EXPECT_EQ(seam.without_twin, 0);
+  EXPECT_EQ(seam.with_more_twins, 0);
+  const MeshReport report = inspect(m);
+  EXPECT_TRUE(report.closed && report.manifold);
+  EXPECT_EQ(report.euler_characteristic, 2);
+  EXPECT_LT(*compare(sphere, m).uv_rms, 0.005);
+
+  DecimateOptions off{.target_ratio = 0.25};
+  off.fit_attributes = false;
+  EXPECT_FALSE(decimate(sphere, off).mesh.has_uvs());
+}
+
 TEST(Decimate, HitsReachableTargetsAndRejectsBadOptions) {
   const Mesh m = test::bumpy_sphere(4, 0.005, 11);
   const DecimateResult r = decimate(m, {.target_faces = 1001});

@@ -39,9 +39,11 @@ struct DecimateOptions {
   /// First turn the faces of an inconsistently oriented input to agree (orient_consistently(), on a
   /// copy), as simplify() does (SimplifyOptions::orient_faces): a vertex whose faces disagree is complex.
   bool orient_faces = true;
-  /// Give the output the input's vertex colours, and its normals where they are one per position
-  /// (vertices are welded by position, so hard edges and UV seams cannot survive; UVs are dropped),
-  /// then fit both to the input's (fit_attributes_to_input()). Off: positions only.
+  /// Give the output the input's vertex colours, its UVs, and its normals where they are one per
+  /// position (vertices are welded by position, so hard edges cannot survive), then fit all three to
+  /// the input's (fit_attributes_to_input()). UV seams count as feature edges, so that a vertex on a
+  /// seam goes only along it and no new face straddles one; the output has a vertex for each side.
+  /// Off: positions only, and seams are not features.
   bool fit_attributes = true;
 };
 

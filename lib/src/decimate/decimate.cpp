@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include "core/topology.h"
@@ -31,6 +32,7 @@ struct Star {
   bool closed = false;          // interior vertex (cycle) or boundary vertex (open chain)
   std::vector<int> features;    // positions in `loop` of feature-edge neighbours (interior only)
   std::vector<Index> faces;
+  std::vector<Index> fan;       // faces in loop order: fan[i] is (v, loop[i], loop[i + 1])
   Eigen::Vector3d normal = Eigen::Vector3d::Zero(), centre = Eigen::Vector3d::Zero();
 };
 
@@ -38,7 +40,9 @@ using Tri = std::array<Index, 3>;
 
 class Decimator {
  public:
-  Decimator(const Mesh& mesh, const DecimateOptions& o) : o_(o), position_class_(position_classes(mesh)) {
+  // `uvs`: the input's UVs, to keep its seams and give each corner its side's UVs; null: positions only.
+  Decimator(const Mesh& mesh, const DecimateOptions& o, const TexCoords* uvs)
+      : o_(o), uvs_(uvs), position_class_(position_classes(mesh)) {
     const Eigen::VectorX<Index>& cls = position_class_;
     std::vector<Index> point_of_class(static_cast<std::size_t>(mesh.num_vertices()), -1);
     std::vector<Index> point_of(static_cast<std::size_t>(mesh.num_vertices()));
@@ -52,7 +56,7 @@ class Decimator {
     for (Index f = 0; f < mesh.num_faces(); ++f) {
       const Tri t{point_of[mesh.triangles(f, 0)], point_of[mesh.triangles(f, 1)], point_of[mesh.triangles(f, 2)]};
       if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-      add_face(t);
+      add_face(t, {mesh.triangles(f, 0), mesh.triangles(f, 1), mesh.triangles(f, 2)});
     }
     error_.assign(position_.size(), 0.0);
     removed_.assign(position_.size(), 0);
@@ -123,6 +127,9 @@ class Decimator {
       a = b;
     }
     if (s.loop.size() != (s.closed ? next.size() : next.size() + 1)) return;  // not a single fan
+    for (const Index point : s.loop)
+      for (std::size_t k = 0; k < next.size(); ++k)
+        if (next[k].first == point) s.fan.push_back(s.faces[k]);
     // Feature edges: the edge (v, loop[i]) between faces (v, loop[i-1], loop[i]) and (v, loop[i], loop[i+1]).
     const std::size_t n = s.loop.size();
     auto face_normal = [&](Index p, Index q) {
@@ -132,7 +139,8 @@ class Decimator {
     for (std::size_t i = 0; i < n; ++i) {
       if (!s.closed && (i == 0 || i + 1 == n)) continue;  // boundary edges
       const Index prev = s.loop[(i + n - 1) % n], w = s.loop[i], nxt = s.loop[(i + 1) % n];
-      if (face_normal(prev, w).dot(face_normal(w, nxt)) < cos_feature_) s.features.push_back(static_cast<int>(i));
+      if (face_normal(prev, w).dot(face_normal(w, nxt)) < cos_feature_ || seam(s, v, i))
+        s.features.push_back(static_cast<int>(i));
     }
     if (!s.closed) s.cls = s.features.empty() ? VertexClass::Boundary : VertexClass::Corner;
     else if (s.features.empty()) s.cls = VertexClass::Simple;
@@ -160,19 +168,26 @@ class Decimator {
   // Tries to remove v: triangulate its hole and apply. Returns false if no acceptable triangulation.
   bool remove(Index v, const Star& s, double error) {
     new_faces_.clear();
-    bool ok;
+    new_wedges_.clear();
     if (s.closed && s.cls == VertexClass::InteriorEdge) {
       // The feature line must survive: split along it first.
       const int i = s.features[0], j = s.features[1];
       std::vector<Index> a(s.loop.begin() + i, s.loop.begin() + j + 1), b(s.loop.begin() + j, s.loop.end());
       b.insert(b.end(), s.loop.begin(), s.loop.begin() + i + 1);
-      ok = !edge_exists(s.loop[i], s.loop[j]) && (a.size() < 3 || split(a, s.normal)) && (b.size() < 3 || split(b, s.normal));
-      if (a.size() < 3 || b.size() < 3) ok = false;  // the feature neighbours are adjacent: nothing to split
+      if (a.size() < 3 || b.size() < 3) return false;  // the feature neighbours are adjacent: nothing to split
+      if (edge_exists(s.loop[i], s.loop[j]) || !split(a, s.normal)) return false;
+      const std::size_t first_of_b = new_faces_.size();
+      if (!split(b, s.normal)) return false;
+      // Each side of the line takes its corners' UVs from the faces on its side (a seam may be the line).
+      std::vector<Index> side_b(s.fan.begin() + j, s.fan.end());
+      side_b.insert(side_b.end(), s.fan.begin(), s.fan.begin() + i);
+      add_wedges(0, first_of_b, std::span(s.fan).subspan(i, j - i));
+      add_wedges(first_of_b, new_faces_.size(), side_b);
     } else {
       if (!s.closed && edge_exists(s.loop.front(), s.loop.back())) return false;  // would close a pinch
-      ok = s.loop.size() >= 3 && split(s.loop, s.normal);
+      if (s.loop.size() < 3 || !split(s.loop, s.normal)) return false;
+      add_wedges(0, new_faces_.size(), s.fan);  // no seam runs through v: one side
     }
-    if (!ok) return false;
     // Every new triangle faces the same way as the star and is not already in the mesh.
     constexpr double kLimit = -0.17;  // cos(100 deg): a corner may not face away from its input normal
     for (const Tri& t : new_faces_) {
@@ -186,7 +201,7 @@ class Decimator {
     if (static_cast<Index>(new_faces_.size()) != static_cast<Index>(s.faces.size()) - 2 + (s.closed ? 0 : 1))
       return false;
     for (Index f : s.faces) alive_[f] = 0, --alive_faces_;
-    for (const Tri& t : new_faces_) add_face(t);
+    for (std::size_t k = 0; k < new_faces_.size(); ++k) add_face(new_faces_[k], uvs_ ? new_wedges_[k] : Tri{});
     removed_[v] = 1;
     point_faces_[v].clear();
     for (Index w : s.loop) {
@@ -201,8 +216,10 @@ class Decimator {
   /// For each input vertex, the first vertex with its position (position_classes()).
   const Eigen::VectorX<Index>& position_class() const { return position_class_; }
 
-  /// The mesh left; `vertex_of`: for each of its vertices, the first input vertex at that position.
+  /// The mesh left; `vertex_of`: for each of its vertices, the first input vertex at that position, or
+  /// with UVs, the input vertex (wedge) whose UVs it carries: a vertex for each UV at a point.
   Mesh output(std::vector<Index>& vertex_of) const {
+    if (uvs_) return output_with_uvs(vertex_of);
     Mesh m;
     std::vector<Index> id(position_.size(), -1);
     Index nv = 0, nf = 0;
@@ -227,9 +244,77 @@ class Decimator {
   }
 
  private:
-  void add_face(const Tri& t) {
+  Mesh output_with_uvs(std::vector<Index>& vertex_of) const {
+    Mesh m;
+    // Per point, its output vertices so far and their UVs: a point lies on few seams.
+    std::vector<std::vector<std::pair<Eigen::Vector2d, Index>>> at_point(position_.size());
+    vertex_of.clear();
+    Index nf = 0;
+    for (std::size_t f = 0; f < face_.size(); ++f) nf += alive_[f];
+    m.triangles.resize(nf, 3);
+    Index row = 0;
+    for (std::size_t f = 0; f < face_.size(); ++f) {
+      if (!alive_[f]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Index w = wedge_[f][k];
+        const Eigen::Vector2d uv = uvs_->row(w).transpose();
+        auto& here = at_point[face_[f][k]];
+        auto it = std::find_if(here.begin(), here.end(), [&](const auto& e) { return e.first == uv; });
+        if (it == here.end()) {
+          here.push_back({uv, static_cast<Index>(vertex_of.size())});
+          vertex_of.push_back(w);
+          it = here.end() - 1;
+        }
+        m.triangles(row, k) = it->second;
+      }
+      ++row;
+    }
+    m.positions.resize(static_cast<Index>(vertex_of.size()), 3);
+    for (std::size_t p = 0; p < position_.size(); ++p)
+      for (const auto& [uv, id] : at_point[p]) m.positions.row(id) = position_[p].transpose();
+    return m;
+  }
+
+  // The input vertex at point p in face f (its wedge: which of the input's vertices there, and so
+  // which UVs).
+  Index wedge_at(Index f, Index p) const {
+    const Tri& t = face_[f];
+    return wedge_[f][t[0] == p ? 0 : t[1] == p ? 1 : 2];
+  }
+
+  // Whether the edge (v, loop[i]) of an interior fan is a UV seam: the UVs at either end differ
+  // between its two faces.
+  bool seam(const Star& s, Index v, std::size_t i) const {
+    if (!uvs_) return false;
+    const std::size_t n = s.loop.size();
+    const Index before = s.fan[(i + n - 1) % n], after = s.fan[i], w = s.loop[i];
+    return uvs_->row(wedge_at(before, v)) != uvs_->row(wedge_at(after, v)) ||
+           uvs_->row(wedge_at(before, w)) != uvs_->row(wedge_at(after, w));
+  }
+
+  // The wedges of new faces [begin, end), each corner's from a face of `side` (old faces around the
+  // hole, UVs continuous across them) at the same point.
+  void add_wedges(std::size_t begin, std::size_t end, std::span<const Index> side) {
+    if (!uvs_) return;
+    for (std::size_t k = begin; k < end; ++k) {
+      Tri w{};
+      for (int c = 0; c < 3; ++c) {
+        const Index p = new_faces_[k][c];
+        w[c] = -1;
+        for (const Index f : side)
+          if (face_[f][0] == p || face_[f][1] == p || face_[f][2] == p) {
+            w[c] = wedge_at(f, p);
+            break;
+          }
+      }
+      new_wedges_.push_back(w);
+    }
+  }
+
+  void add_face(const Tri& t, const Tri& wedges) {
     const auto f = static_cast<Index>(face_.size());
     face_.push_back(t);
+    if (uvs_) wedge_.push_back(wedges);
     alive_.push_back(1);
     ++alive_faces_;
     for (Index p : t) point_faces_[p].push_back(f);
@@ -293,39 +378,43 @@ class Decimator {
   }
 
   const DecimateOptions& o_;
+  const TexCoords* uvs_;
   std::vector<Eigen::Vector3d> position_;
   std::vector<Index> first_vertex_;  // per point: the first input vertex there
   Eigen::VectorX<Index> position_class_;
   std::vector<Tri> face_;
+  std::vector<Tri> wedge_;  // with UVs: per face, the input vertex at each corner
   std::vector<char> alive_;
   std::vector<std::vector<Index>> point_faces_;
   std::vector<double> error_;
   std::vector<char> removed_;
   std::vector<Eigen::Vector3d> normal0_;
   std::vector<Tri> new_faces_;
+  std::vector<Tri> new_wedges_;
   Index alive_faces_ = 0;
   double cos_feature_ = 0;
 };
 
-// The output's vertices are the input's points (vertices welded by position), each the first input
-// vertex there: it takes that vertex's colour, and its normal where the input has one normal per
-// position (where it has several, at hard edges, the welding cannot keep them, and no normals are
-// written). UVs, split along their seams, are dropped. Then normals and colours are fitted to the
-// input's (fit_attributes_to_input()).
+// Each output vertex is an input vertex (`vertex_of`): the first at its point, or with UVs, one there
+// for each side of a seam. It takes that vertex's UVs and colour, and its normal where the input has
+// one normal per position (where it has several, at hard edges, the welding cannot keep them, and no
+// normals are written). Then all three are fitted to the input's (fit_attributes_to_input()).
 // `cls`: the input's position classes (position_classes()).
 std::optional<AttributeFitReport> carry_attributes(const Mesh& input, const Eigen::VectorX<Index>& cls,
-                                                   const std::vector<Index>& vertex_of, Mesh& out) {
+                                                   const std::vector<Index>& vertex_of, bool uvs, Mesh& out) {
   bool normals = input.has_normals();
   for (Index v = 0; v < input.num_vertices() && normals; ++v)
     normals = (input.attributes.normals.row(v) - input.attributes.normals.row(cls[v])).norm() <= 1e-9;
   const bool colours = input.has_colours();
-  if (!normals && !colours) return std::nullopt;
+  if (!normals && !colours && !uvs) return std::nullopt;
   const Index n = out.num_vertices();
   if (normals) out.attributes.normals.resize(n, 3);
   if (colours) out.attributes.colours.resize(n, 4);
+  if (uvs) out.attributes.uvs.resize(n, 2);
   for (Index i = 0; i < n; ++i) {
     if (normals) out.attributes.normals.row(i) = input.attributes.normals.row(vertex_of[i]);
     if (colours) out.attributes.colours.row(i) = input.attributes.colours.row(vertex_of[i]);
+    if (uvs) out.attributes.uvs.row(i) = input.attributes.uvs.row(vertex_of[i]);
   }
   return fit_attributes_to_input(input, out);
 }
@@ -336,7 +425,7 @@ std::array<Index, 5> count_vertex_classes(const Mesh& mesh, double feature_angle
   validate(mesh, "decimate");
   DecimateOptions o;
   o.feature_angle_deg = feature_angle_deg;
-  Decimator d(mesh, o);
+  Decimator d(mesh, o, nullptr);
   std::array<Index, 5> counts{};
   Star s;
   for (Index v = 0; v < d.points(); ++v) {
@@ -375,7 +464,9 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
 
   Mesh turned;
   const Mesh& source = detail::oriented(mesh, options.orient_faces, turned, r.reoriented_faces);
-  Decimator d(source, options);
+  // With UVs, their seams are feature lines, so that no new face straddles one.
+  const bool uvs = options.fit_attributes && source.has_uvs();
+  Decimator d(source, options, uvs ? &source.attributes.uvs : nullptr);
   Star s;
   for (double t : thresholds) {
     for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v) {
@@ -407,7 +498,7 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
 
   std::vector<Index> vertex_of;
   r.mesh = d.output(vertex_of);
-  if (options.fit_attributes) r.attribute_fit = carry_attributes(source, d.position_class(), vertex_of, r.mesh);
+  if (options.fit_attributes) r.attribute_fit = carry_attributes(source, d.position_class(), vertex_of, uvs, r.mesh);
   r.faces_out = r.mesh.num_faces();
   r.vertices_out = r.mesh.num_vertices();
   r.target_reached = has_target ? r.faces_out <= target : true;
@@ -428,11 +519,14 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
   if (has_target && r.target_reached) {
     r.reason_text = fmt::format("reached the target: {} faces (target {})", r.faces_out, target);
   } else {
+    // Points, not vertices: with UVs a point on a seam is a vertex for each side.
+    const Index points_left = c[0] + c[1] + c[2] + c[3] + c[4];
     r.reason_text = fmt::format(
-        "stopped at {} faces{}: of the {} vertices left ({}), {} are corners or complex (kept by rule), {} are "
+        "stopped at {} faces{}: of the {} vertices left ({}), {} are corners or complex (kept by rule{}), {} are "
         "farther than {:.6g} from their plane or line, {} found no split meeting the aspect ratio {}",
-        r.faces_out, has_target ? fmt::format(" above the target of {}", target) : "", r.vertices_out, classes,
-        c[1] + c[4], r.remaining_above_threshold, max_error, r.remaining_no_triangulation, options.aspect_ratio);
+        r.faces_out, has_target ? fmt::format(" above the target of {}", target) : "", points_left, classes,
+        c[1] + c[4], uvs ? "; UV seams are feature lines" : "", r.remaining_above_threshold, max_error,
+        r.remaining_no_triangulation, options.aspect_ratio);
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
