@@ -253,9 +253,10 @@ TEST(Simplify, CreasePlanesKeepAThinBladesOutline) {
   }
 }
 
-TEST(Simplify, UvSeamsStayAligned) {
+TEST_P(EveryMethod, KeepsUvSeamsAligned) {
   const Mesh sphere = make_uv_sphere({.segments = 64, .rings = 32, .uvs = true});
   SimplifyOptions o;
+  o.method = GetParam();
   o.target_ratio = 0.1;
   const SimplifyResult r = simplify(sphere, o);
   const Mesh& m = r.mesh;
@@ -276,7 +277,9 @@ TEST(Simplify, UvSeamsStayAligned) {
   const test::SeamTwins seam = test::u_seam_twins(m);
   EXPECT_GE(seam.seam, 2);
   EXPECT_EQ(seam.without_twin, 0);
-  EXPECT_EQ(seam.with_more_twins, 0);
+  // edge-length, whose costs ignore the UVs, pulls a pole (a wedge per face) onto the seam, and two of
+  // the pole's wedges on one side end up with the same UVs: a vertex twice, the texture still whole.
+  if (GetParam() != SimplifyMethod::EdgeLength) EXPECT_EQ(seam.with_more_twins, 0);
   EXPECT_TRUE(inspect(m).closed);
 }
 
