@@ -32,7 +32,7 @@ struct Star {
   bool closed = false;          // interior vertex (cycle) or boundary vertex (open chain)
   std::vector<int> features;    // positions in `loop` of feature-edge neighbours (interior only)
   std::vector<Index> faces;
-  std::vector<Index> fan;       // faces in loop order: fan[i] is (v, loop[i], loop[i + 1])
+  std::vector<Index> fan;       // with UVs, faces in loop order: fan[i] is (v, loop[i], loop[i + 1])
   Eigen::Vector3d normal = Eigen::Vector3d::Zero(), centre = Eigen::Vector3d::Zero();
 };
 
@@ -127,9 +127,11 @@ class Decimator {
       a = b;
     }
     if (s.loop.size() != (s.closed ? next.size() : next.size() + 1)) return;  // not a single fan
-    for (const Index point : s.loop)
-      for (std::size_t k = 0; k < next.size(); ++k)
-        if (next[k].first == point) s.fan.push_back(s.faces[k]);
+    if (uvs_) {  // (the fan serves the seams alone)
+      for (const Index point : s.loop)
+        for (std::size_t k = 0; k < next.size(); ++k)
+          if (next[k].first == point) s.fan.push_back(s.faces[k]);
+    }
     // Feature edges: the edge (v, loop[i]) between faces (v, loop[i-1], loop[i]) and (v, loop[i], loop[i+1]).
     const std::size_t n = s.loop.size();
     auto face_normal = [&](Index p, Index q) {
@@ -178,15 +180,17 @@ class Decimator {
       if (edge_exists(s.loop[i], s.loop[j]) || !split(a, s.normal)) return false;
       const std::size_t first_of_b = new_faces_.size();
       if (!split(b, s.normal)) return false;
-      // Each side of the line takes its corners' UVs from the faces on its side (a seam may be the line).
-      std::vector<Index> side_b(s.fan.begin() + j, s.fan.end());
-      side_b.insert(side_b.end(), s.fan.begin(), s.fan.begin() + i);
-      add_wedges(0, first_of_b, std::span(s.fan).subspan(i, j - i));
-      add_wedges(first_of_b, new_faces_.size(), side_b);
+      if (uvs_) {
+        // Each side of the line takes its corners' UVs from the faces on its side (a seam may be the line).
+        std::vector<Index> side_b(s.fan.begin() + j, s.fan.end());
+        side_b.insert(side_b.end(), s.fan.begin(), s.fan.begin() + i);
+        add_wedges(0, first_of_b, std::span(s.fan).subspan(i, j - i));
+        add_wedges(first_of_b, new_faces_.size(), side_b);
+      }
     } else {
       if (!s.closed && edge_exists(s.loop.front(), s.loop.back())) return false;  // would close a pinch
       if (s.loop.size() < 3 || !split(s.loop, s.normal)) return false;
-      add_wedges(0, new_faces_.size(), s.fan);  // no seam runs through v: one side
+      if (uvs_) add_wedges(0, new_faces_.size(), s.fan);  // no seam runs through v: one side
     }
     // Every new triangle faces the same way as the star and is not already in the mesh.
     constexpr double kLimit = -0.17;  // cos(100 deg): a corner may not face away from its input normal
@@ -295,7 +299,6 @@ class Decimator {
   // The wedges of new faces [begin, end), each corner's from a face of `side` (old faces around the
   // hole, UVs continuous across them) at the same point.
   void add_wedges(std::size_t begin, std::size_t end, std::span<const Index> side) {
-    if (!uvs_) return;
     for (std::size_t k = begin; k < end; ++k) {
       Tri w{};
       for (int c = 0; c < 3; ++c) {
