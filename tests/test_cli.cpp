@@ -978,6 +978,11 @@ TEST(CliSubdivide, SchemesLevelsAndToleranceEndToEnd) {
   r = run(dir, "subdivide cube.obj -o x.ply --tolerance small");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("--tolerance"), std::string::npos);
+  // Ten levels of the cube would be 6 x 4 x 4^9 x 2 = 12,582,912 triangles: past a limit of a million,
+  // refused at once rather than refined until memory runs out.
+  r = run(dir, "subdivide cube.obj -o x.ply --scheme catmull-clark --levels 10 --max-faces 1000000");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("would make 12582912 triangles"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
 }
 

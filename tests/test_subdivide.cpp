@@ -268,6 +268,46 @@ TEST(Subdivide, ToleranceStopsAtTheFirstLevelCloseToTheNext) {
   EXPECT_THROW(subdivide(ico, o), Error);
 }
 
+// Faces grow 4x a level, and refining holds about 260 bytes a face: levels that would pass max_faces
+// are refused before any work, with the count they would make. The count is exact: Loop 20 x 4^L on
+// an icosahedron; Catmull-Clark 6 quads x 4 corners, x 4^(L - 1) quads, x 2 triangles on a cube.
+TEST(Subdivide, RefusesLevelsThatWouldPassTheFaceLimit) {
+  const Mesh ico = make_icosphere({.radius = 1.0, .subdivisions = 0});
+  SubdivideOptions o;
+  o.levels = 3;
+  o.max_faces = 20 * 64;
+  EXPECT_EQ(subdivide(ico, o).mesh.num_faces(), 20 * 64);  // exactly at the limit
+  o.max_faces = 20 * 64 - 1;
+  try {
+    subdivide(ico, o);
+    ADD_FAILURE() << "3 levels of 1,280 faces passed a limit of 1,279";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("would make 1280 triangles"), std::string::npos) << e.what();
+  }
+  // The tolerance search stops at the limit too, rather than refine past it.
+  o = {};
+  o.tolerance = 1e-9;
+  o.max_faces = 20 * 16;
+  try {
+    subdivide(ico, o);
+    ADD_FAILURE() << "the tolerance search went past the limit";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("3 levels would make 1280 triangles"), std::string::npos) << e.what();
+  }
+  // A cube of 6 quads: 2 levels make 6 x 4 x 4 quads, 192 triangles.
+  const std::vector<int> quads(6, 4);
+  const Mesh cube = make_box({});
+  o = {};
+  o.scheme = SubdivisionScheme::CatmullClark;
+  o.levels = 2;
+  o.max_faces = 191;
+  EXPECT_THROW(subdivide(cube, o, quads), Error);
+  o.max_faces = 192;
+  EXPECT_EQ(subdivide(cube, o, quads).mesh.num_faces(), 192);
+  o.max_faces = 0;
+  EXPECT_THROW(subdivide(cube, o, quads), Error);
+}
+
 TEST(Subdivide, BadInputIsRefused) {
   const Mesh ico = make_icosphere({.radius = 1.0, .subdivisions = 0});
   EXPECT_THROW(subdivide(Mesh{}, {}), Error);

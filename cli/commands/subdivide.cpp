@@ -47,6 +47,10 @@ Command add_subdivide_command(CLI::App& app, const GlobalOptions& global) {
       ->capture_default_str()
       ->check(CLI::IsMember({"smooth", "corners", "corners1", "corners2", "boundaries", "all"}));
   sub->add_flag("--limit", opt->subdivide.limit, "Move the final points onto the limit surface");
+  sub->add_option("--max-faces", opt->subdivide.max_faces,
+                  "Refuse, before any work, levels that would make more triangles than this (refining "
+                  "takes about 260 bytes a face)")
+      ->capture_default_str()->check(CLI::Range(std::int64_t{1}, std::int64_t{2147483647}));
   sub->footer(R"(Examples:
   lodkit generate icosphere -o ico.ply --subdivisions 0
   lodkit subdivide ico.ply -o smooth.ply --scheme loop --levels 3 --limit

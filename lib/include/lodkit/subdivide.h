@@ -9,6 +9,7 @@
 // each output quad is split along its shorter diagonal.
 #include <lodkit/mesh.h>
 
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <vector>
@@ -44,6 +45,10 @@ struct SubdivideOptions {
   BoundaryRule boundary = BoundaryRule::EdgeOnly;
   UvRule uv_rule = UvRule::CornersOnly;
   bool limit = false;              ///< move the final points onto the limit surface
+  /// Most output triangles: more levels than this allows are refused before any work (faces grow 4x
+  /// per level, and refining takes about 260 bytes a face, so the default stays near 13 GB). At most
+  /// 2^31 - 1, the largest face index.
+  std::int64_t max_faces = 50'000'000;
 };
 
 struct SubdivideResult {
@@ -55,8 +60,8 @@ struct SubdivideResult {
 
 /// Subdivides `mesh`. `polygon_sizes`, when given, are the corner counts of the file's polygons
 /// (ReadOptions::polygon_sizes); without them every triangle is a face.
-/// \throw Error for levels outside 0..max, an empty mesh, polygons that do not match the triangles,
-/// or topology OpenSubdiv rejects.
+/// \throw Error for levels outside 0..max, an output of more than max_faces triangles, an empty mesh,
+/// polygons that do not match the triangles, or topology OpenSubdiv rejects.
 SubdivideResult subdivide(const Mesh& mesh, const SubdivideOptions& options = {},
                           std::span<const int> polygon_sizes = {});
 

@@ -10,7 +10,10 @@
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
+#include <cmath>
+#include <limits>
 #include <memory>
+#include <string>
 #include <unordered_map>
 
 namespace lodkit {
@@ -247,6 +250,27 @@ Mesh subdivide_levels(const Mesh& mesh, const Faces& faces, const SubdivideOptio
   return out;
 }
 
+// Triangles `levels` levels make: Loop splits each triangle into 4; Catmull-Clark and bilinear turn
+// an n-gon into n quads, then each quad into 4, and every quad is written as 2 triangles.
+double output_triangles(const Mesh& mesh, const Faces& faces, SubdivisionScheme scheme, int levels) {
+  if (levels == 0) return static_cast<double>(mesh.num_faces());
+  const double growth = std::pow(4.0, levels - 1);
+  if (scheme == SubdivisionScheme::Loop) return 4.0 * growth * static_cast<double>(mesh.num_faces());
+  double corners = 0;
+  for (const int size : faces.sizes) corners += size;
+  return 2.0 * growth * corners;
+}
+
+// `advice`: what to do instead.
+void check_output_size(const Mesh& mesh, const Faces& faces, const SubdivideOptions& o, int levels,
+                       const std::string& advice) {
+  const double triangles = output_triangles(mesh, faces, o.scheme, levels);
+  if (triangles > static_cast<double>(o.max_faces))
+    throw Error(fmt::format("subdivide: {} level{} would make {:.0f} triangles, more than the limit of {} (max "
+                            "faces; refining takes about 260 bytes a face); {}",
+                            levels, levels == 1 ? "" : "s", triangles, o.max_faces, advice));
+}
+
 }  // namespace
 
 SubdivideResult subdivide(const Mesh& mesh, const SubdivideOptions& options, std::span<const int> polygon_sizes) {
@@ -254,11 +278,15 @@ SubdivideResult subdivide(const Mesh& mesh, const SubdivideOptions& options, std
   if (mesh.num_faces() == 0) throw Error("subdivide: the mesh has no faces");
   if (options.max_levels < 0 || options.max_levels > 10)
     throw Error(fmt::format("subdivide: max levels must be 0..10, not {}", options.max_levels));
+  if (options.max_faces < 1 || options.max_faces > std::numeric_limits<Index>::max())
+    throw Error(fmt::format("subdivide: max faces must be 1..{}, not {}", std::numeric_limits<Index>::max(),
+                            options.max_faces));
   const Faces faces = faces_of(mesh, polygon_sizes, options.scheme == SubdivisionScheme::Loop);
   SubdivideResult result;
   if (!options.tolerance) {
     if (options.levels < 0 || options.levels > 10)
       throw Error(fmt::format("subdivide: levels must be 0..10, not {}", options.levels));
+    check_output_size(mesh, faces, options, options.levels, "use fewer levels or raise the limit");
     result.levels = options.levels;
     result.mesh = subdivide_levels(mesh, faces, options, options.levels);
     return result;
@@ -270,6 +298,12 @@ SubdivideResult subdivide(const Mesh& mesh, const SubdivideOptions& options, std
   // Model no more than the scene needs: stop at the first level the next one barely changes.
   Mesh current = subdivide_levels(mesh, faces, options, 0);
   for (int level = 0; level < options.max_levels; ++level) {
+    if (level > 0)  // before the level that would be too large
+      check_output_size(mesh, faces, options, level + 1,
+                        fmt::format("level {} -> {} still moves the surface by {:.4g} > tolerance {:.4g}; raise the "
+                                    "tolerance or the limit", level - 1, level, result.level_change.back(), tolerance));
+    else
+      check_output_size(mesh, faces, options, 1, "raise the limit");
     Mesh next = subdivide_levels(mesh, faces, options, level + 1);
     const double change = compare(current, next).hausdorff;
     result.level_change.push_back(change);
