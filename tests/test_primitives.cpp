@@ -146,6 +146,37 @@ TEST(Primitives, BadParametersAreClearErrors) {
   }
 }
 
+// Each count is within its range, but their product is not: a box of 65536 divisions (51.5 billion
+// faces) overflowed the face index and wrote out of bounds; a grid as fine ran out of memory after
+// 38 s. Both are refused before anything is built, naming the count; the largest allowed still builds.
+TEST(Primitives, CountsWhoseProductIsTooManyFacesAreRefusedBeforeBuilding) {
+  const auto refusal = [](auto&& make) -> std::string {
+    try {
+      make();
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "built";
+  };
+  EXPECT_NE(refusal([] { return make_box({.divisions = 65536}); }).find("box: 65536 divisions make 51539607552 faces"),
+            std::string::npos);
+  EXPECT_NE(refusal([] { return make_grid({.divisions_x = 65536, .divisions_y = 65536}); }).find("8589934592 faces"),
+            std::string::npos);
+  EXPECT_NE(refusal([] { return make_torus({.major_segments = 65536, .minor_segments = 65536}); }).find("torus:"),
+            std::string::npos);
+  EXPECT_NE(refusal([] { return make_cylinder({.segments = 65536, .stacks = 65536}); }).find("cylinder:"),
+            std::string::npos);
+  EXPECT_NE(refusal([] { return make_uv_sphere({.segments = 65536, .rings = 65536}); }).find("sphere:"),
+            std::string::npos);
+  EXPECT_NE(refusal([] { return make_uv_sphere({.tolerance = 1e-12}); }).find("tolerance too small"), std::string::npos);
+  // The limit is 65536 by 1024 divisions of a grid, 2^27 faces (too large to build in a test): one more
+  // row is refused, and the longest allowed strip builds.
+  EXPECT_EQ(2 * std::int64_t{65536} * 1024, kMostPrimitiveFaces);
+  EXPECT_NE(refusal([] { return make_grid({.divisions_x = 65536, .divisions_y = 1025}); }).find("134348800 faces"),
+            std::string::npos);
+  EXPECT_EQ(make_grid({.divisions_x = 65536, .divisions_y = 1}).num_faces(), 2 * 65536);
+}
+
 TEST(Geometry, TrianglePlanesBoundTheDistanceFromBelowAndMeetItInsideThePrism) {
   // Random triangles (some thin, some slivers) and points: the bound never exceeds the squared
   // distance beyond rounding (a sliver's normal is too uncertain: its bound is 0), and equals it (the

@@ -7,9 +7,14 @@
 // A given tolerance overrides the segment counts.
 #include <lodkit/mesh.h>
 
+#include <cstdint>
 #include <optional>
 
 namespace lodkit {
+
+/// The most faces a generated primitive may have (about 6.5 GB while it is built): each count is
+/// checked on its own (segments, divisions: 65536 at most), and this bounds their product.
+inline constexpr std::int64_t kMostPrimitiveFaces = std::int64_t{1} << 27;
 
 struct BoxOptions {
   Eigen::Vector3d size{1.0, 1.0, 1.0};

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <string>
 #include <fmt/format.h>
 #include <numbers>
 #include <vector>
@@ -49,6 +51,12 @@ void require_positive(double v, const char* shape, const char* name) {
 void require_count(int n, int minimum, const char* shape, const char* name) {
   require(n >= minimum && n <= 1 << 16, shape,
           fmt::format("{} must be between {} and 65536, got {}", name, minimum, n));
+}
+// Counts are checked one at a time, so their product may still be more than memory (or a face index)
+// holds: a box of 65536 divisions would be 51.5 billion faces.
+void require_faces(std::int64_t faces, const char* shape, const std::string& how) {
+  require(faces <= kMostPrimitiveFaces, shape,
+          fmt::format("{} make {} faces, more than the {} a generated mesh may have", how, faces, kMostPrimitiveFaces));
 }
 
 // The largest gap between a sphere of `radius` about the origin and a triangle: every point of the
@@ -113,6 +121,7 @@ double torus_chordal_error(double major_radius, double minor_radius, int major_s
 Mesh make_box(const BoxOptions& o) {
   for (int k = 0; k < 3; ++k) require_positive(o.size[k], "box", "size");
   require_count(o.divisions, 1, "box", "divisions");
+  require_faces(12 * std::int64_t{o.divisions} * o.divisions, "box", fmt::format("{} divisions", o.divisions));
   const int d = o.divisions;
   // Lattice coordinate k/d along each axis, so shared edges of neighbouring faces get identical
   // positions and weld exactly.
@@ -151,12 +160,15 @@ Mesh make_uv_sphere(const UvSphereOptions& o) {
     rings = 2;
     while (uv_sphere_chordal_error(o.radius, 2 * rings, rings) > *o.tolerance) {
       ++rings;
-      require(rings <= 1 << 14, "sphere", "tolerance too small");
+      require(4 * std::int64_t{rings} * (rings - 1) <= kMostPrimitiveFaces, "sphere",
+              fmt::format("tolerance too small: it needs more than the {} faces a generated mesh may have",
+                          kMostPrimitiveFaces));
     }
     segments = 2 * rings;
   }
   require_count(segments, 3, "sphere", "segments");
   require_count(rings, 2, "sphere", "rings");
+  require_faces(2 * std::int64_t{segments} * (rings - 1), "sphere", fmt::format("{} segments and {} rings", segments, rings));
   MeshBuilder b;
   if (!o.uvs) {
     const Index north = b.vertex(0, 0, o.radius);
@@ -274,6 +286,8 @@ Mesh make_cylinder(const CylinderOptions& o) {
   const int n = o.tolerance ? circle_segments_for_tolerance(o.radius, *o.tolerance) : o.segments;
   require_count(n, 3, "cylinder", "segments");
   require_count(o.stacks, 1, "cylinder", "stacks");
+  require_faces(std::int64_t{n} * (2 * std::int64_t{o.stacks} + 2), "cylinder",
+                fmt::format("{} segments and {} stacks", n, o.stacks));
   MeshBuilder b;
   const double h = o.height;
   for (int i = 0; i <= o.stacks; ++i) {
@@ -327,6 +341,7 @@ Mesh make_torus(const TorusOptions& o) {
   }
   require_count(nu, 3, "torus", "major segments");
   require_count(nv, 3, "torus", "minor segments");
+  require_faces(2 * std::int64_t{nu} * nv, "torus", fmt::format("{} by {} segments", nu, nv));
   MeshBuilder b;
   const int cu = o.uvs ? nu + 1 : nu, cv = o.uvs ? nv + 1 : nv;
   for (int i = 0; i < cu; ++i)
@@ -347,6 +362,8 @@ Mesh make_grid(const GridOptions& o) {
   require_positive(o.size.y(), "grid", "size y");
   require_count(o.divisions_x, 1, "grid", "divisions x");
   require_count(o.divisions_y, 1, "grid", "divisions y");
+  require_faces(2 * std::int64_t{o.divisions_x} * o.divisions_y, "grid",
+                fmt::format("{} by {} divisions", o.divisions_x, o.divisions_y));
   MeshBuilder b;
   const int nx = o.divisions_x, ny = o.divisions_y;
   for (int j = 0; j <= ny; ++j)
