@@ -69,6 +69,13 @@ std::vector<BadFile> write_bad_corpus(const std::filesystem::path& dir) {
   // OFF.
   add("truncated.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n", "file ends at vertex 2 of 4");
   add("wrong_face_count.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "file ends at face 1 of 2");
+  // Counts of billions in a small file: refused before allocating for them (they ran out of memory,
+  // and the message named no file).
+  add("billions.off", "OFF\n2000000000 1 0\n0 0 0\n", "the header says 2000000000 vertices");
+  add("billions.ply",
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2147483647\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n",
+      "the header says 2147483647 vertex elements");
   add("nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", "finite");
   add("index_out_of_range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", "out of range");
   add("two_vertices.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "at least 3");

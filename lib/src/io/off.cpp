@@ -58,6 +58,12 @@ Mesh read_off(std::string_view bytes, const std::string& name, std::vector<int>*
   if (!c.at_line_end()) c.integer("edge count");
   if (nv < 0 || nf < 0) c.fail("negative counts in header");
   if (nv > std::numeric_limits<Index>::max()) c.fail("too many vertices");
+  // Before allocating for millions of them: a vertex line takes at least 6 bytes ("0 0 0\n"), a face 8
+  // ("3 0 1 2\n"). (Smaller counts are read until the file ends, which says where.)
+  if (const double least = 6.0 * static_cast<double>(nv) + 8.0 * static_cast<double>(nf);
+      nv + nf > (1 << 20) && least - 1 > static_cast<double>(bytes.end() - c.pos()))  // (the last line may lack its newline)
+    c.fail(fmt::format("the header says {} vertices and {} faces, which take at least {:.0f} bytes, but {} are left "
+                       "(truncated, or the header counts are wrong)", nv, nf, least, bytes.end() - c.pos()));
 
   Mesh mesh;
   Attributes& a = mesh.attributes;

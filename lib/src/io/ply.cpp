@@ -246,10 +246,31 @@ class BodyReader {
   long long row_ = 0;
 };
 
+// The header's counts against the bytes after it, before anything is allocated for them: each row of
+// an element takes at least its scalars' sizes (a list at least its count) in binary, and at least a
+// character and a separator a property in ASCII. A corrupt count of millions is then a clear error
+// rather than an allocation that runs out of memory; smaller ones are read until the file ends, which
+// says where.
+void check_counts_fit(const Header& h, std::size_t body_bytes, const std::string& name) {
+  constexpr long long kSmall = 1 << 20;  // rows allocated without a look at the file's size
+  double least = 0;  // bytes the rows so far need at the least (a double: counts may be huge)
+  for (const Element& e : h.elements) {
+    double row = 0;
+    for (const Property& p : e.properties)
+      row += h.encoding == Encoding::Ascii ? 2.0 : static_cast<double>(size_of(p.is_list ? p.count_type : p.type));
+    least += row * static_cast<double>(e.count);
+    if (e.count > kSmall && least - 1 > static_cast<double>(body_bytes))  // (the last line may lack its newline)
+      throw Error(fmt::format("{}: the header says {} {} elements, which take at least {:.0f} bytes, but the file has "
+                              "{} after its header (truncated, or the header count is wrong)",
+                              name, e.count, e.name, least, body_bytes));
+  }
+}
+
 }  // namespace
 
 Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>* polygon_sizes) {
   const Header h = parse_header(bytes, name);
+  check_counts_fit(h, bytes.size() - h.body_offset, name);
   BodyReader in(bytes.substr(h.body_offset), h.encoding, name);
 
   Mesh mesh;
