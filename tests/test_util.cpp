@@ -2,6 +2,8 @@
 
 #include <lodkit/primitives.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -101,6 +103,21 @@ SeamTwins u_seam_twins(const Mesh& m) {
     out.with_more_twins += twins > 1;
   }
   return out;
+}
+
+double widest_u_span(const Mesh& m, double band) {
+  double widest = 0;
+  for (Index f = 0; f < m.num_faces(); ++f) {
+    double lo = 1, hi = 0;
+    bool inside = true;
+    for (int k = 0; k < 3; ++k) {
+      const Index v = m.triangles(f, k);
+      inside &= std::abs(m.attributes.uvs(v, 1) - 0.5) <= band;
+      lo = std::min(lo, m.attributes.uvs(v, 0)), hi = std::max(hi, m.attributes.uvs(v, 0));
+    }
+    if (inside) widest = std::max(widest, hi - lo);
+  }
+  return widest;
 }
 
 }  // namespace lodkit::test

@@ -44,5 +44,9 @@ struct SeamTwins {
   Index seam = 0, without_twin = 0, with_more_twins = 0;
 };
 SeamTwins u_seam_twins(const Mesh& m);
+/// The widest range of u over one face's corners, among faces whose corners all have |v - 0.5| <= band:
+/// a face straddling the u = 0 / u = 1 seam spans most of the texture. (Near a UV sphere's poles faces
+/// fan over many longitudes, which a band below 0.5 leaves out.)
+double widest_u_span(const Mesh& m, double band = 0.5);
 
 }  // namespace lodkit::test
