@@ -421,5 +421,17 @@ TEST(FlippedFaces, CountFacesAgainstTheNearestInputFacesAndNoneAgainstThemselves
 
 TEST(Compare, RefusesEmptyMeshes) { EXPECT_THROW(compare(Mesh{}, make_box({})), Error); }
 
+// 2·10⁹ samples (about 200 GB) ran out of memory with a message naming nothing; now a refusal up front.
+TEST(Compare, RefusesMoreSamplesThanMemoryHolds) {
+  const Mesh box = make_box({});
+  try {
+    compare(box, box, {.samples = 2'000'000'000});
+    ADD_FAILURE() << "2e9 samples were taken";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("about 200 GB"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(compare(box, box, {.samples = 0}), Error);
+}
+
 }  // namespace
 }  // namespace lodkit

@@ -19,11 +19,13 @@
 
 namespace lodkit {
 
-/// compare()'s default face samples for a mesh of `faces` faces: 10 per face, at least 10,000.
+/// compare()'s default face samples for a mesh of `faces` faces: 10 per face, at least 10,000 and at
+/// most 150 M (beyond 15 M faces, fewer than 10 a face: memory).
 long long default_face_samples(Index faces);
 
 struct CompareOptions {
-  /// Face samples per direction; default default_face_samples() of the larger mesh.
+  /// Face samples per direction; default default_face_samples() of the larger mesh. At most 150 M
+  /// (about 100 bytes each while measured).
   std::optional<long long> samples{};
   /// Certify the maximum to this fraction: max_bound <= max * (1 + hausdorff_tolerance).
   double hausdorff_tolerance = 1e-3;

@@ -265,8 +265,16 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
   return d;
 }
 
+// Each sample holds about 100 bytes while it is measured (10 M: 1 GB): past this, a clear refusal
+// rather than running out of memory part way.
+constexpr long long kMostSamples = 150'000'000;
+
 void check_samples(long long samples) {
   if (samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", samples));
+  if (samples > kMostSamples)
+    throw Error(fmt::format("compare: {} samples a direction would take about {:.0f} GB (about 100 bytes a sample); "
+                            "at most {} (ask for fewer with --samples)",
+                            samples, 1e-9 * 100.0 * static_cast<double>(samples), kMostSamples));
 }
 
 Comparison combine(const Mesh& a, DirectedDistance a_to_b, DirectedDistance b_to_a) {
@@ -291,7 +299,7 @@ Comparison combine(const Mesh& a, DirectedDistance a_to_b, DirectedDistance b_to
 
 }  // namespace
 
-long long default_face_samples(Index faces) { return std::max<long long>(10'000, 10LL * faces); }
+long long default_face_samples(Index faces) { return std::clamp<long long>(10LL * faces, 10'000, kMostSamples); }
 
 struct CompareReference::State {
   const Mesh& mesh;
