@@ -233,6 +233,29 @@ TEST(CliCompare, ColoursAreReportedWhenBothMeshesHaveThem) {
   EXPECT_FALSE(nlohmann::json::parse(run(dir, "compare a.ply plain.ply --json").out).contains("colour_rms"));
 }
 
+// The benchmarks' "flipped" count for any two files: B's faces facing against A's nearest face. A
+// sphere against itself has none; with a cap of faces turned, those count.
+TEST(CliCompare, CountsTheFacesOfBFacingAgainstA) {
+  test::ScratchDir dir("cli-compare-against");
+  const Mesh a = make_icosphere({.subdivisions = 2});
+  Mesh b = a;
+  Index turned = 0;
+  for (Index f = 0; f < b.num_faces(); ++f)
+    if (b.positions(b.triangles(f, 0), 2) > 0.5 && b.positions(b.triangles(f, 1), 2) > 0.5 &&
+        b.positions(b.triangles(f, 2), 2) > 0.5)
+      std::swap(b.triangles(f, 1), b.triangles(f, 2)), ++turned;
+  ASSERT_GT(turned, 0);
+  write_mesh(a, (dir / "a.ply").string());
+  write_mesh(b, (dir / "b.ply").string());
+  CliRun r = run(dir, "compare a.ply a.ply --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["b_faces_against_a"].get<Index>(), 0);
+  r = run(dir, "compare a.ply b.ply --json");
+  EXPECT_EQ(nlohmann::json::parse(r.out)["b_faces_against_a"].get<Index>(), turned);
+  r = run(dir, "compare a.ply b.ply");
+  EXPECT_NE(r.out.find(fmt::format("{} of B's {} faces face against", turned, b.num_faces())), std::string::npos) << r.out;
+}
+
 TEST(CliCompare, ShadingNormalsAreReportedWhenBothMeshesHaveThem) {
   test::ScratchDir dir("cli-compare-shading");
   Mesh a = make_icosphere({.subdivisions = 2});

@@ -87,13 +87,16 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
             CompareOptions o;
             o.samples = opt->samples;
             const Comparison c = compare(a, b, o);
+            // The benchmarks' "flipped" faces, with A as the input: B's faces facing against A's nearest.
+            const Index against = count_flipped_faces(a, b);
             if (opt->json) {
               nlohmann::json j{{"a", opt->a}, {"b", opt->b}, {"diagonal", c.diagonal},
                                {"hausdorff", c.hausdorff}, {"hausdorff_percent", c.percent(c.hausdorff)},
                                {"hausdorff_bound", c.hausdorff_bound},
                                {"hausdorff_bound_percent", c.percent(c.hausdorff_bound)}, {"mean", c.mean}, {"mean_percent", c.percent(c.mean)},
                                {"rms", c.rms}, {"rms_percent", c.percent(c.rms)},
-                               {"a_to_b", directed_json(c.a_to_b, c)}, {"b_to_a", directed_json(c.b_to_a, c)}};
+                               {"a_to_b", directed_json(c.a_to_b, c)}, {"b_to_a", directed_json(c.b_to_a, c)},
+                               {"b_faces_against_a", against}};
               if (c.colour_rms) j["colour_rms"] = *c.colour_rms;
               if (c.shading_rms_deg) j["shading_rms_deg"] = *c.shading_rms_deg;
               if (c.uv_rms) j["uv_rms"] = *c.uv_rms;
@@ -127,6 +130,8 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
                          "the area\n",
                          "UV deviation", *c.uv_rms, *c.a_to_b.uv_max, *c.b_to_a.uv_max, 100 * c.a_to_b.uv_compared,
                          100 * c.b_to_a.uv_compared);
+            fmt::print("{:<22} {:>14} of B's {} faces face against A's nearest face\n", "faces against A",
+                       thousands(against), thousands(b.num_faces()));
             fmt::print("{:<22} {:>14} ({} + {})\n", "samples", thousands(c.a_to_b.samples + c.b_to_a.samples),
                        thousands(c.a_to_b.samples), thousands(c.b_to_a.samples));
             fmt::print("{:<22} {:>14.6g}\n", "diagonal of A", c.diagonal);
