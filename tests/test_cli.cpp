@@ -639,12 +639,12 @@ TEST(CliSimplify, InvertedFacesAreAnOptionAndMeasureCountsThem) {
 }
 
 TEST(CliSimplify, AnOptionTheMethodDoesNotReadIsRefused) {
-  // Ignored in silence, --inverted-faces with schroeder or --seed with quadric would look as if it
+  // Ignored in silence, --crease-weight with schroeder or --seed with quadric would look as if it
   // had done something: each is a usage error naming the option, and nothing is written.
   test::ScratchDir dir("cli-simplify-method-options");
   ASSERT_EQ(run(dir, "generate sphere -o s.ply").status, 0);
   for (const std::string args :
-       {"--method schroeder --inverted-faces refuse", "--method schroeder --no-inverted-faces",
+       {"--method schroeder --lane-faces 100", "--method schroeder --refit-passes 1",
         "--method schroeder --crease-weight 1", "--method schroeder --max-valence 8", "--feature-angle 20",
         "--method hoppe --accumulate-error", "--seed 3", "--method edge-length --hoppe-samples 2",
         "--method hoppe --crease-weight 1"}) {
@@ -656,8 +656,14 @@ TEST(CliSimplify, AnOptionTheMethodDoesNotReadIsRefused) {
   }
   // And with the method that reads it, each is fine.
   for (const std::string args : {"--method schroeder --feature-angle 20 --accumulate-error", "--method hoppe --seed 3",
-                                  "--crease-weight 1 --inverted-faces avoid --max-valence 8"})
+                                  "--crease-weight 1 --inverted-faces avoid --max-valence 8",
+                                  "--method schroeder --inverted-faces allow", "--method schroeder --no-inverted-faces"})
     EXPECT_EQ(run(dir, "simplify s.ply -o out.ply --ratio 0.5 " + args).status, 0) << args;
+  // schroeder removes vertices in passes, with no queue to wait in: it allows or refuses, never avoids.
+  const CliRun avoid = run(dir, "simplify s.ply -o out2.ply --ratio 0.5 --method schroeder --inverted-faces avoid");
+  EXPECT_EQ(avoid.status, 2);
+  EXPECT_NE(avoid.err.find("--method schroeder has none"), std::string::npos) << avoid.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out2.ply"));
 }
 
 TEST(CliSimplify, TheTotalTurnLimitIsAnOptionToo) {

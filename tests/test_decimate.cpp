@@ -107,6 +107,21 @@ TEST(Decimate, OutputsStayManifoldUnflippedWithTheSameEulerCharacteristic) {
   }
 }
 
+// The paper's checks (each new face against the star's plane, its corners against their input normals)
+// let a fold through on a noisy sphere: a face turned 121 degrees from the input face nearest it. Such
+// removals are refused by default, and the output then has none.
+TEST(Decimate, RefusesRemovalsThatLeaveAFaceFacingAgainstTheInput) {
+  const Mesh noisy = test::bumpy_sphere(4, 0.03);
+  DecimateOptions paper{.target_ratio = 0.1};
+  paper.refuse_inverted_faces = false;
+  EXPECT_GT(count_flipped_faces(noisy, decimate(noisy, paper).mesh), 0);
+  const DecimateResult r = decimate(noisy, {.target_ratio = 0.1});
+  EXPECT_EQ(count_flipped_faces(noisy, r.mesh), 0);
+  const MeshReport after = inspect(r.mesh);
+  EXPECT_TRUE(after.closed && after.manifold);
+  EXPECT_EQ(after.euler_characteristic, 2);
+}
+
 TEST(Decimate, OpenMeshKeepsItsBoundaryWithinTheAccumulatedBound) {
   const Mesh m = dome();
   const double t = 0.03;

@@ -174,6 +174,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   d.accumulate_error = o.accumulate_error;
   d.orient_faces = !o.keep_orientation;
   d.fit_attributes = !o.no_attribute_fit;
+  d.refuse_inverted_faces = o.inverted_faces != "allow";
   DecimateResult r = decimate(mesh, d);
   if (o.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
@@ -467,10 +468,13 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
     refuse_unless(m != "schroeder",
                   {"--placement", "--preserve-boundary", "--lock-boundary", "--allow-topology-change",
                    "--max-normal-change", "--max-total-normal-change", "--crease-weight", "--attribute-weights",
-                   "--lane-faces", "--max-valence", "--refit-passes", "--refit-rms-passes", "--inverted-faces",
-                   "--no-inverted-faces", "--max-hausdorff", "--pixel-error"},
+                   "--lane-faces", "--max-valence", "--refit-passes", "--refit-rms-passes", "--max-hausdorff",
+                   "--pixel-error"},
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
+    if (m == "schroeder" && opt->inverted_faces == "avoid")
+      throw CLI::ValidationError("--inverted-faces", "avoid lets a collapse wait in a queue; --method schroeder has "
+                                                      "none (allow or refuse)");
     refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",
                                  "--hoppe-crease-angle", "--hoppe-fit-passes"}, "--method hoppe");
     refuse_unless(m == "quadric", {"--crease-weight"}, "--method quadric");

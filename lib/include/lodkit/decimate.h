@@ -45,6 +45,10 @@ struct DecimateOptions {
   /// seam goes only along it and no new face straddles one; the output has a vertex for each side.
   /// Off: positions only, and seams are not features.
   bool fit_attributes = true;
+  /// Refuse a removal that would leave a new face facing against the input face nearest its centroid
+  /// (count_flipped_faces()'s rule; the checks against the star's plane and its corners' input
+  /// normals let a fold through where the input is noisy). Off: the paper's checks alone.
+  bool refuse_inverted_faces = true;
 };
 
 struct DecimateResult {
@@ -59,6 +63,7 @@ struct DecimateResult {
   std::array<Index, 5> remaining_by_class{};
   Index remaining_above_threshold = 0;   ///< removable by class, but too far from plane or line
   Index remaining_no_triangulation = 0;  ///< close enough, but no split met the rules
+  Index remaining_inverted = 0;  ///< of those, the last try left a face facing against the input
   /// What the fit of the normals and colours did, when the output has some (fit_attributes).
   std::optional<AttributeFitReport> attribute_fit{};
   double seconds = 0.0;

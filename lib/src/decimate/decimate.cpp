@@ -6,10 +6,12 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <numbers>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include "core/topology.h"
+#include "metrics/aabb_tree.h"
 
 namespace lodkit {
 namespace {
@@ -70,7 +72,19 @@ class Decimator {
     for (auto& n : normal0_)
       if (n.norm() > 0) n.normalize();
     cos_feature_ = std::cos(o.feature_angle_deg * std::numbers::pi / 180.0);
+    if (o.refuse_inverted_faces) {
+      inverted_.assign(position_.size(), 0);
+      // A face of the input at each point: where a new face's corner is, a start for the search whose
+      // certificate mostly settles the answer at once.
+      input_face_.assign(position_.size(), -1);
+      for (Index f = 0; f < mesh.num_faces(); ++f)
+        for (int k = 0; k < 3; ++k)
+          if (Index& at = input_face_[point_of[mesh.triangles(f, k)]]; at < 0) at = f;
+    }
   }
+
+  /// refuse_inverted_faces: the input's tree, readied by prepare_facing().
+  void set_input_tree(const detail::AabbTree* tree) { input_tree_ = tree; }
 
   Index alive_faces() const { return alive_faces_; }
   Index points() const { return static_cast<Index>(position_.size()); }
@@ -171,6 +185,7 @@ class Decimator {
   bool remove(Index v, const Star& s, double error) {
     new_faces_.clear();
     new_wedges_.clear();
+    if (!inverted_.empty()) inverted_[v] = 0;
     if (s.closed && s.cls == VertexClass::InteriorEdge) {
       // The feature line must survive: split along it first.
       const int i = s.features[0], j = s.features[1];
@@ -204,6 +219,10 @@ class Decimator {
     }
     if (static_cast<Index>(new_faces_.size()) != static_cast<Index>(s.faces.size()) - 2 + (s.closed ? 0 : 1))
       return false;
+    if (input_tree_) {
+      inverted_[v] = faces_against_input();
+      if (inverted_[v]) return false;
+    }
     for (Index f : s.faces) alive_[f] = 0, --alive_faces_;
     for (std::size_t k = 0; k < new_faces_.size(); ++k) add_face(new_faces_[k], uvs_ ? new_wedges_[k] : Tri{});
     removed_[v] = 1;
@@ -217,6 +236,8 @@ class Decimator {
   }
 
   double accumulated(Index v) const { return error_[v]; }
+  /// Whether v's last removal was refused for a face facing against the input.
+  bool refused_as_inverted(Index v) const { return !inverted_.empty() && inverted_[v]; }
   /// For each input vertex, the first vertex with its position (position_classes()).
   const Eigen::VectorX<Index>& position_class() const { return position_class_; }
 
@@ -248,6 +269,20 @@ class Decimator {
   }
 
  private:
+  // Whether a new face faces against the input face nearest its centroid, and no input face as near
+  // faces its way (count_flipped_faces()).
+  bool faces_against_input() const {
+    for (const Tri& t : new_faces_) {
+      Index hint = input_face_[t[0]];
+      const Eigen::Vector3d centroid = (position_[t[0]] + position_[t[1]] + position_[t[2]]) / 3.0;
+      const Eigen::Vector3d n = (position_[t[1]] - position_[t[0]]).cross(position_[t[2]] - position_[t[0]]);
+      if (input_tree_->facing_against(centroid, n, hint) &&
+          !input_tree_->faces_way_within(centroid, n, input_tree_->closest(centroid, hint).squared_distance))
+        return true;
+    }
+    return false;
+  }
+
   Mesh output_with_uvs(std::vector<Index>& vertex_of) const {
     Mesh m;
     // Per point, its output vertices so far and their UVs: a point lies on few seams.
@@ -394,6 +429,9 @@ class Decimator {
   std::vector<Eigen::Vector3d> normal0_;
   std::vector<Tri> new_faces_;
   std::vector<Tri> new_wedges_;
+  const detail::AabbTree* input_tree_ = nullptr;  // refuse_inverted_faces: the input, for the side of its nearest face
+  std::vector<char> inverted_;                  // per point: its last removal refused for that
+  std::vector<Index> input_face_;               // per point: an input face there (the searches' hint)
   Index alive_faces_ = 0;
   double cos_feature_ = 0;
 };
@@ -470,6 +508,13 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
   // With UVs, their seams are feature lines, so that no new face straddles one.
   const bool uvs = options.fit_attributes && source.has_uvs();
   Decimator d(source, options, uvs ? &source.attributes.uvs : nullptr);
+  // (Built beside the decimator's own setup on the other core, this saved nothing: the searches cost.)
+  std::optional<detail::AabbTree> tree;
+  if (options.refuse_inverted_faces) {
+    tree.emplace(source);
+    tree->prepare_facing();
+    d.set_input_tree(&*tree);
+  }
   Star s;
   for (double t : thresholds) {
     for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v) {
@@ -514,7 +559,7 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
     const double e = d.removal_error(v, s);
     if (e < 0) continue;
     if (e + (options.accumulate_error ? d.accumulated(v) : 0.0) > max_error) ++r.remaining_above_threshold;
-    else ++r.remaining_no_triangulation;
+    else ++r.remaining_no_triangulation, r.remaining_inverted += d.refused_as_inverted(v);
   }
   const auto& c = r.remaining_by_class;
   const std::string classes = fmt::format("{} simple, {} complex, {} boundary, {} interior-edge, {} corner", c[0], c[1],
@@ -526,10 +571,13 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
     const Index points_left = c[0] + c[1] + c[2] + c[3] + c[4];
     r.reason_text = fmt::format(
         "stopped at {} faces{}: of the {} vertices left ({}), {} are corners or complex (kept by rule{}), {} are "
-        "farther than {:.6g} from their plane or line, {} found no split meeting the aspect ratio {}",
+        "farther than {:.6g} from their plane or line, {} found no split meeting the aspect ratio {}{}",
         r.faces_out, has_target ? fmt::format(" above the target of {}", target) : "", points_left, classes,
         c[1] + c[4], uvs ? "; UV seams are feature lines" : "", r.remaining_above_threshold, max_error,
-        r.remaining_no_triangulation, options.aspect_ratio);
+        r.remaining_no_triangulation, options.aspect_ratio,
+        r.remaining_inverted > 0
+            ? fmt::format(" ({} of them last left a face facing against the input)", r.remaining_inverted)
+            : "");
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
