@@ -466,6 +466,7 @@ std::array<Index, 5> count_vertex_classes(const Mesh& mesh, double feature_angle
   validate(mesh, "decimate");
   DecimateOptions o;
   o.feature_angle_deg = feature_angle_deg;
+  o.refuse_inverted_faces = false;  // classification only: nothing is removed
   Decimator d(mesh, o, nullptr);
   std::array<Index, 5> counts{};
   Star s;
