@@ -169,7 +169,8 @@ CLI::Option* add_inverted_faces_option(CLI::App* app, std::optional<std::string>
       ->add_option("--inverted-faces", mode,
                    "Collapses that leave a face facing against the nearest input face: allow (no check), avoid (such a "
                    "collapse waits until the others cost four times as much), refuse (never; may stop short of the "
-                   "target, and says so). Default: avoid for quadric, allow for hoppe and edge-length, refuse for schroeder")
+                   "target, and says so). Default: avoid for quadric, refuse for schroeder (whose avoid lets such a removal be once "
+                   "a pass's threshold is twice its error), allow for hoppe and edge-length")
       ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
 }
 

@@ -113,10 +113,18 @@ TEST(Decimate, OutputsStayManifoldUnflippedWithTheSameEulerCharacteristic) {
 TEST(Decimate, RefusesRemovalsThatLeaveAFaceFacingAgainstTheInput) {
   const Mesh noisy = test::bumpy_sphere(4, 0.03);
   DecimateOptions paper{.target_ratio = 0.1};
-  paper.refuse_inverted_faces = false;
+  paper.inverted_faces = InvertedFaces::Allow;
   EXPECT_GT(count_flipped_faces(noisy, decimate(noisy, paper).mesh), 0);
   const DecimateResult r = decimate(noisy, {.target_ratio = 0.1});
   EXPECT_EQ(count_flipped_faces(noisy, r.mesh), 0);
+  EXPECT_FALSE(r.inverted_allowed_at);
+  // Avoid lets such a removal be once the pass's threshold is twice its error, and says from where.
+  DecimateOptions avoid{.target_ratio = 0.1};
+  avoid.inverted_faces = InvertedFaces::Avoid;
+  const DecimateResult waited = decimate(noisy, avoid);
+  if (count_flipped_faces(noisy, waited.mesh) > 0) {
+    EXPECT_TRUE(waited.inverted_allowed_at);
+  }
   const MeshReport after = inspect(r.mesh);
   EXPECT_TRUE(after.closed && after.manifold);
   EXPECT_EQ(after.euler_characteristic, 2);

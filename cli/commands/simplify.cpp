@@ -174,7 +174,8 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   d.accumulate_error = o.accumulate_error;
   d.orient_faces = !o.keep_orientation;
   d.fit_attributes = !o.no_attribute_fit;
-  d.refuse_inverted_faces = o.inverted_faces != "allow";
+  if (o.inverted_faces) d.inverted_faces = *parse_inverted_faces(*o.inverted_faces);  // (checked by the option)
+  if (o.no_inverted_faces) d.inverted_faces = InvertedFaces::Refuse;
   DecimateResult r = decimate(mesh, d);
   if (o.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
@@ -192,6 +193,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
                                     {"corner", c[4]}, {"above_threshold", r.remaining_above_threshold},
                                     {"no_triangulation", r.remaining_no_triangulation}}}};
     if (r.attribute_fit) j["attribute_fit"] = attribute_fit_json(*r.attribute_fit);
+    if (r.inverted_allowed_at) j["inverted_allowed_at_faces"] = *r.inverted_allowed_at;
     if (o.measure) put_measured(j, measured);
     fmt::print("{}\n", j.dump(2));
   } else if (!global.quiet) {
@@ -203,6 +205,9 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
     if (r.attribute_fit) print_attribute_fit(*r.attribute_fit);
     if (o.measure) print_measured(measured);
     fmt::print(stderr, "  {}\n", r.reason_text);
+    if (!r.target_reached && r.remaining_inverted > 0 && d.inverted_faces == InvertedFaces::Refuse)
+      fmt::print(stderr, "  hint: --inverted-faces avoid lets such a removal be once a pass's threshold is twice its "
+                         "error; allow never checks\n");
   }
   return 0;
 }
@@ -472,9 +477,6 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                    "--pixel-error"},
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
-    if (m == "schroeder" && opt->inverted_faces == "avoid")
-      throw CLI::ValidationError("--inverted-faces", "avoid lets a collapse wait in a queue; --method schroeder has "
-                                                      "none (allow or refuse)");
     refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",
                                  "--hoppe-crease-angle", "--hoppe-fit-passes"}, "--method hoppe");
     refuse_unless(m == "quadric", {"--crease-weight"}, "--method quadric");

@@ -45,10 +45,14 @@ struct DecimateOptions {
   /// seam goes only along it and no new face straddles one; the output has a vertex for each side.
   /// Off: positions only, and seams are not features.
   bool fit_attributes = true;
-  /// Refuse a removal that would leave a new face facing against the input face nearest its centroid
+  /// Removals that would leave a new face facing against the input face nearest its centroid
   /// (count_flipped_faces()'s rule; the checks against the star's plane and its corners' input
-  /// normals let a fold through where the input is noisy). Off: the paper's checks alone.
-  bool refuse_inverted_faces = true;
+  /// normals let a fold through where the input is noisy or parts cross). Refuse: never (the output has
+  /// none). Avoid: such a removal waits until a pass's threshold is twice its error, then is let be
+  /// (DecimateResult::inverted_allowed_at). Allow: the paper's checks alone. Over the shared scans, CAD
+  /// parts and attribute meshes at 10 % and 1 %, such faces: 3,224 with Allow, 2,820 with Avoid, 0 with
+  /// Refuse, which costs reach where parts cross (docs/benchmarks-log.md, "Session 45").
+  InvertedFaces inverted_faces = InvertedFaces::Refuse;
 };
 
 struct DecimateResult {
@@ -64,6 +68,9 @@ struct DecimateResult {
   Index remaining_above_threshold = 0;   ///< removable by class, but too far from plane or line
   Index remaining_no_triangulation = 0;  ///< close enough, but no split met the rules
   Index remaining_inverted = 0;  ///< of those, the last try left a face facing against the input
+  /// InvertedFaces::Avoid: the faces there were when a removal was first let leave a face facing
+  /// against the input; unset if none was.
+  std::optional<Index> inverted_allowed_at{};
   /// What the fit of the normals and colours did, when the output has some (fit_attributes).
   std::optional<AttributeFitReport> attribute_fit{};
   double seconds = 0.0;

@@ -72,7 +72,7 @@ class Decimator {
     for (auto& n : normal0_)
       if (n.norm() > 0) n.normalize();
     cos_feature_ = std::cos(o.feature_angle_deg * std::numbers::pi / 180.0);
-    if (o.refuse_inverted_faces) {
+    if (o.inverted_faces != InvertedFaces::Allow) {
       inverted_.assign(position_.size(), 0);
       // A face of the input at each point: where a new face's corner is, a start for the search whose
       // certificate mostly settles the answer at once.
@@ -83,7 +83,8 @@ class Decimator {
     }
   }
 
-  /// refuse_inverted_faces: the input's tree, readied by prepare_facing().
+  /// The input's tree, readied by prepare_facing(), to refuse removals that leave a face facing against
+  /// it; null: no such check.
   void set_input_tree(const detail::AabbTree* tree) { input_tree_ = tree; }
 
   Index alive_faces() const { return alive_faces_; }
@@ -182,7 +183,10 @@ class Decimator {
   }
 
   // Tries to remove v: triangulate its hole and apply. Returns false if no acceptable triangulation.
-  bool remove(Index v, const Star& s, double error) {
+  // `may_invert`: let a new face face against the input (InvertedFaces::Avoid, once the pass's
+  // threshold is well past this removal's error); `inverted`, on return, whether one does.
+  bool remove(Index v, const Star& s, double error, bool may_invert, bool& inverted) {
+    inverted = false;
     new_faces_.clear();
     new_wedges_.clear();
     if (!inverted_.empty()) inverted_[v] = 0;
@@ -220,7 +224,8 @@ class Decimator {
     if (static_cast<Index>(new_faces_.size()) != static_cast<Index>(s.faces.size()) - 2 + (s.closed ? 0 : 1))
       return false;
     if (input_tree_) {
-      inverted_[v] = faces_against_input();
+      inverted = faces_against_input();
+      inverted_[v] = inverted && !may_invert;
       if (inverted_[v]) return false;
     }
     for (Index f : s.faces) alive_[f] = 0, --alive_faces_;
@@ -429,7 +434,7 @@ class Decimator {
   std::vector<Eigen::Vector3d> normal0_;
   std::vector<Tri> new_faces_;
   std::vector<Tri> new_wedges_;
-  const detail::AabbTree* input_tree_ = nullptr;  // refuse_inverted_faces: the input, for the side of its nearest face
+  const detail::AabbTree* input_tree_ = nullptr;  // the input, for the side of its nearest face (inverted_faces)
   std::vector<char> inverted_;                  // per point: its last removal refused for that
   std::vector<Index> input_face_;               // per point: an input face there (the searches' hint)
   Index alive_faces_ = 0;
@@ -466,7 +471,7 @@ std::array<Index, 5> count_vertex_classes(const Mesh& mesh, double feature_angle
   validate(mesh, "decimate");
   DecimateOptions o;
   o.feature_angle_deg = feature_angle_deg;
-  o.refuse_inverted_faces = false;  // classification only: nothing is removed
+  o.inverted_faces = InvertedFaces::Allow;  // classification only: nothing is removed
   Decimator d(mesh, o, nullptr);
   std::array<Index, 5> counts{};
   Star s;
@@ -511,12 +516,25 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
   Decimator d(source, options, uvs ? &source.attributes.uvs : nullptr);
   // (Built beside the decimator's own setup on the other core, this saved nothing: the searches cost.)
   std::optional<detail::AabbTree> tree;
-  if (options.refuse_inverted_faces) {
+  if (options.inverted_faces != InvertedFaces::Allow) {
     tree.emplace(source, detail::AabbTree::Options{.copy_corners = false});  // (few closest() calls: lean)
     tree->prepare_facing();
     d.set_input_tree(&*tree);
   }
   Star s;
+  // A removal that leaves a face facing against the input waits (Avoid) until the threshold is twice its
+  // error, as an edge collapse waits until the others cost four times as much (squared distances).
+  constexpr double kInvertedWait = 2.0;
+  const auto may_invert = [&](double error, double threshold) {
+    return options.inverted_faces == InvertedFaces::Avoid && kInvertedWait * error < threshold;
+  };
+  const auto apply = [&](Index v, double error, double bound, double threshold) {
+    bool inverted = false;
+    if (!d.remove(v, s, error, may_invert(bound, threshold), inverted)) return;
+    ++r.removed;
+    r.error = std::max(r.error, bound);
+    if (inverted && !r.inverted_allowed_at) r.inverted_allowed_at = d.alive_faces() + (s.closed ? 2 : 1);
+  };
   for (double t : thresholds) {
     for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v) {
       if (d.removed(v)) continue;
@@ -527,10 +545,7 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
       if (bound > t) continue;
       const Index removes = s.closed ? 2 : 1;
       if (d.alive_faces() - removes < target && removes > 1) continue;  // would overshoot by one
-      if (d.remove(v, s, e)) {
-        ++r.removed;
-        r.error = std::max(r.error, bound);
-      }
+      apply(v, e, bound, t);
     }
     if (d.alive_faces() <= target) break;
   }
@@ -540,8 +555,9 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
       if (d.removed(v)) continue;
       d.star(v, s);
       const double e = d.removal_error(v, s);
-      if (e < 0 || e + (options.accumulate_error ? d.accumulated(v) : 0.0) > max_error) continue;
-      if (d.remove(v, s, e)) ++r.removed, r.error = std::max(r.error, e + (options.accumulate_error ? d.accumulated(v) : 0.0));
+      if (e < 0) continue;
+      const double bound = e + (options.accumulate_error ? d.accumulated(v) : 0.0);
+      if (bound <= max_error) apply(v, e, bound, max_error);
     }
   }
 
@@ -580,6 +596,9 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
             ? fmt::format(" ({} of them last left a face facing against the input)", r.remaining_inverted)
             : "");
   }
+  if (r.inverted_allowed_at)
+    r.reason_text += fmt::format("; faces were let face against the input from {} faces on, where the removal's "
+                                 "error was half the pass's threshold", *r.inverted_allowed_at);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
