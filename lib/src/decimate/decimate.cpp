@@ -281,9 +281,7 @@ class Decimator {
       Index hint = input_face_[t[0]];
       const Eigen::Vector3d centroid = (position_[t[0]] + position_[t[1]] + position_[t[2]]) / 3.0;
       const Eigen::Vector3d n = (position_[t[1]] - position_[t[0]]).cross(position_[t[2]] - position_[t[0]]);
-      if (input_tree_->facing_against(centroid, n, hint) &&
-          !input_tree_->faces_way_within(centroid, n, input_tree_->closest(centroid, hint).squared_distance))
-        return true;
+      if (input_tree_->facing_against_all_nearest(centroid, n, hint)) return true;
     }
     return false;
   }

@@ -411,6 +411,11 @@ bool AabbTree::facing_against(const Eigen::Vector3d& p, const Eigen::Vector3d& n
   return hit.face >= 0 && face_normal(hit.face).dot(normal) < 0;
 }
 
+bool AabbTree::facing_against_all_nearest(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const {
+  // Ties are rare: the second search runs only where the first found the nearest face against.
+  return facing_against(p, normal, hint) && !faces_way_within(p, normal, closest(p, hint).squared_distance);
+}
+
 Eigen::Vector3d AabbTree::face_normal(Index f) const {
   if (!normals_.empty()) return normals_[f];
   const Eigen::Vector3d a = mesh_.positions.row(mesh_.triangles(f, 0)), b = mesh_.positions.row(mesh_.triangles(f, 1)),

@@ -72,6 +72,9 @@ class AabbTree {
   /// the rounding of distances: with the nearest face's distance, whether a face as near faces p's way
   /// (two faces that coincide facing opposite ways, or meet at the edge nearest p, tie).
   bool faces_way_within(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, double squared_distance) const;
+  /// Whether `normal` faces against every face nearest p: facing_against(), and no face as near facing
+  /// its way (faces_way_within()). count_flipped_faces()'s rule; `hint` as for facing_against().
+  bool facing_against_all_nearest(const Eigen::Vector3d& p, const Eigen::Vector3d& normal, Index& hint) const;
 
   /// What facing_against() may conclude without a search, for the faces of one leaf: a normal n with
   /// axis . n > min_dot |n|, asked about at a point p with 2 |p - anchor| < clearance, faces the same

@@ -367,10 +367,7 @@ Index count_flipped_faces(const Mesh& reference, const Mesh& mesh) {
   Index flipped = 0, hint = -1;
   for (Index f = 0; f < mesh.num_faces(); ++f) {
     const Eigen::Vector3d a = corner(mesh, f, 0), b = corner(mesh, f, 1), c = corner(mesh, f, 2);
-    const Eigen::Vector3d centroid = (a + b + c) / 3.0, normal = (b - a).cross(c - a);
-    if (!tree.facing_against(centroid, normal, hint)) continue;
-    // Against the nearest face; but where another as near faces its way, it is not against the input.
-    flipped += !tree.faces_way_within(centroid, normal, tree.closest(centroid, hint).squared_distance);
+    flipped += tree.facing_against_all_nearest((a + b + c) / 3.0, (b - a).cross(c - a), hint);
   }
   return flipped;
 }
