@@ -46,6 +46,14 @@ std::vector<BadFile> write_bad_corpus(const std::filesystem::path& dir) {
   add("negative_index.ply", ply_head + "0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n", "out of range");
   add("two_indices.ply", ply_head + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "at least 3");
   add("too_many_rows.ply", ply_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n", "header counts");
+  {
+    // Indices stored as floats must be whole numbers: casting 6.2e63 to an integer was undefined
+    // behaviour, and 0.5 was silently read as 0 (found by fuzzing the reader).
+    std::string float_head = ply_head;
+    float_head.replace(float_head.find("uchar int"), 9, "uchar float");
+    add("huge_float_index.ply", float_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 6.2e63\n", "bad vertex index");
+    add("fractional_index.ply", float_head + "0 0 0\n1 0 0\n0 1 0\n3 0 0.5 2\n", "bad vertex index 0.5");
+  }
   add("no_magic.ply", "format ascii 1.0\nend_header\n", "not a PLY file");
   add("no_end_header.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", "end_header");
   add("bad_format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", "unknown PLY format");

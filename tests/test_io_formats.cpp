@@ -88,6 +88,21 @@ TEST(Ply, AnyNumericTypesAndFaceColours) {
   EXPECT_EQ(m.attributes.face_colours.row(1), Eigen::RowVector4f(10 / 255.f, 20 / 255.f, 30 / 255.f, 1));
 }
 
+TEST(Ply, FloatIndicesAreReadWhenWholeNumbers) {
+  // They were skipped, leaving a mesh without faces and no word of it.
+  std::string bytes =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar float vertex_indices\nend_header\n";
+  const float values[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  bytes.append(reinterpret_cast<const char*>(values), sizeof values);
+  bytes.push_back(3);
+  const float indices[3] = {2, 0, 1};
+  bytes.append(reinterpret_cast<const char*>(indices), sizeof indices);
+  const Mesh m = ply(bytes);
+  ASSERT_EQ(m.num_faces(), 1);
+  EXPECT_EQ(m.triangles.row(0), Eigen::RowVector3i(2, 0, 1));
+}
+
 TEST(Ply, BigEndianBinaryWithIntCountsAndTriStrips) {
   std::string bytes =
       "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"

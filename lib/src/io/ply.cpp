@@ -6,6 +6,7 @@
 
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <optional>
 #include <vector>
@@ -151,13 +152,13 @@ Header parse_header(std::string_view bytes, const std::string& name) {
       if (e.name == "vertex" && !p.is_list) p.role = vertex_role(p.name);
       if (e.name == "face") {
         if (p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index"))
-          p.role = is_integer(p.type) ? Role::FaceIndices : Role::Skip;
+          p.role = Role::FaceIndices;  // float indices too, if whole numbers (index() checks)
         else if (!p.is_list) {
           const Role r = vertex_role(p.name);
           if (r == Role::Red || r == Role::Green || r == Role::Blue || r == Role::Alpha) p.role = r;
         }
       }
-      if (e.name == "tristrips" && p.is_list && p.name == "vertex_indices" && is_integer(p.type))
+      if (e.name == "tristrips" && p.is_list && p.name == "vertex_indices")
         p.role = Role::StripIndices;
       e.properties.push_back(std::move(p));
     } else if (key == "comment" || key == "obj_info") {
@@ -215,6 +216,14 @@ class BodyReader {
     if (!(c >= 0) || c != std::floor(c) || c > 1e9)
       fail(fmt::format("bad list length {}", c));
     return static_cast<long long>(c);
+  }
+
+  /// A vertex index, which a file may store in any type: a float one must hold a whole number
+  /// (casting anything else, or one past long long's range, would be undefined).
+  long long index(PlyType t) {
+    const double v = scalar(t);
+    if (!(std::abs(v) <= 9.0e15) || v != std::floor(v)) fail(fmt::format("bad vertex index {}", v));
+    return static_cast<long long>(v);
   }
 
   /// Called after the last element: anything left over means the header lied.
@@ -319,7 +328,7 @@ Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>*
             continue;
           }
           polygon.resize(static_cast<std::size_t>(n));
-          for (long long k = 0; k < n; ++k) polygon[k] = static_cast<long long>(in.scalar(p.type));
+          for (long long k = 0; k < n; ++k) polygon[k] = in.index(p.type);
           if (p.role == Role::FaceIndices) {
             if (n < 3)
               in.fail(fmt::format("face has {} vertex indices (at least 3 needed)", n));
