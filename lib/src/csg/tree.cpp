@@ -17,6 +17,7 @@
 #include <optional>
 #include <mutex>
 #include <sstream>
+#include <tuple>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
@@ -303,7 +304,8 @@ struct Evaluator {
     if (options.split_at_parts > 0 && parts.size() >= options.split_at_parts) {
       if (const auto plane = separating_plane(a, parts, axis)) {
         try {
-          auto [below, above] = split_solid(a, plane->axis, plane->at);
+          Mesh below, above;  // not a structured binding: the lambdas below capture them
+          std::tie(below, above) = split_solid(a, plane->axis, plane->at);
           std::vector<Mesh> lower, upper;
           for (const Mesh& p : parts) (bounding_box(p).max()[plane->axis] < plane->at ? lower : upper).push_back(p);
           tbb::parallel_invoke([&] { below = subtract(std::move(below), std::move(lower), name_a, name_b, plane->axis); },

@@ -598,7 +598,14 @@ class HoppeCost final : public CostModel {
     // Each point with the index in `around` of the face it had (none for a vanished face's points).
     const std::vector<Index>& around = s.faces_of(v);
     const std::size_t none = around.size();
-    auto& [moving, values, home_of, rows, landed] = reassign_scratch_.local();
+    // Named references rather than a structured binding: lambdas below use them, which clang
+    // before 16 refuses for bindings.
+    ReassignScratch& scratch = reassign_scratch_.local();
+    auto& moving = scratch.moving;
+    auto& values = scratch.values;
+    auto& home_of = scratch.home_of;
+    auto& rows = scratch.rows;
+    auto& landed = scratch.landed;
     moving.clear(), values.clear(), home_of.clear(), landed.clear();
     auto take_values = [&](Index f) {  // with E_scalar, the values go along
       if (dims_ == 0) return;
