@@ -54,6 +54,12 @@ std::vector<BadFile> write_bad_corpus(const std::filesystem::path& dir) {
     add("huge_float_index.ply", float_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 6.2e63\n", "bad vertex index");
     add("fractional_index.ply", float_head + "0 0 0\n1 0 0\n0 1 0\n3 0 0.5 2\n", "bad vertex index 0.5");
   }
+  // A face count with no indices to read: faces silently vanished, and a count of 748 million with
+  // no property to bound it by the file's size was reserved for (out of memory; found by fuzzing).
+  add("faces_without_indices.ply",
+      "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 748173922\nend_header\n",
+      "the face element has no vertex_indices list");
   add("no_magic.ply", "format ascii 1.0\nend_header\n", "not a PLY file");
   add("no_end_header.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", "end_header");
   add("bad_format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", "unknown PLY format");

@@ -308,10 +308,16 @@ Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>*
         mesh.attributes.colours = Colours::Ones(e.count, 4);
     }
     const bool is_face = e.name == "face";
-    bool face_colour = false;
+    bool face_colour = false, face_indices = false;
     if (is_face)
-      for (const Property& p : e.properties)
+      for (const Property& p : e.properties) {
         face_colour |= p.role == Role::Red;
+        face_indices |= p.role == Role::FaceIndices;
+      }
+    // Faces without indices would be read as none at all; and without any property their count,
+    // which no file size bounds, would be trusted for the reserve below.
+    if (is_face && e.count > 0 && !face_indices)
+      throw Error(fmt::format("{}: the face element has no vertex_indices list", name));
     if (is_face && face_colour) face_rgba.reserve(static_cast<std::size_t>(4 * e.count));
     if (is_face) tris.reserve(static_cast<std::size_t>(3 * e.count));
 
