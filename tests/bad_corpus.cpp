@@ -78,6 +78,17 @@ std::vector<BadFile> write_bad_corpus(const std::filesystem::path& dir) {
     const std::int32_t count = -5;
     bad_list.append(reinterpret_cast<const char*>(&count), 4);
     add("negative_list_length.ply", bad_list, "bad list length");
+    // A list of 999,999,999 indices holding 3: 8 GB were allocated for it before reading.
+    std::string long_list =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uint int vertex_indices\nend_header\n";
+    const float corners[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    long_list.append(reinterpret_cast<const char*>(corners), sizeof corners);
+    const std::uint32_t length = 999'999'999;
+    long_list.append(reinterpret_cast<const char*>(&length), 4);
+    const std::int32_t three[3] = {0, 1, 2};
+    long_list.append(reinterpret_cast<const char*>(three), sizeof three);
+    add("long_list.ply", long_list, "file ends in face 0 of 1");
   }
 
   // OFF.
@@ -90,6 +101,9 @@ std::vector<BadFile> write_bad_corpus(const std::filesystem::path& dir) {
       "ply\nformat binary_little_endian 1.0\nelement vertex 2147483647\nproperty float x\nproperty float y\n"
       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n",
       "the header says 2147483647 vertex elements");
+  // A polygon's corner count is not trusted for an allocation: 272 quadrillion corners asked for
+  // 2 exabytes before the first index was read (found by fuzzing).
+  add("huge_polygon.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n272000000000000000 0 1 2\n", "missing vertex index");
   add("nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", "finite");
   add("index_out_of_range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", "out of range");
   add("two_vertices.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "at least 3");

@@ -102,11 +102,12 @@ Mesh read_off(std::string_view bytes, const std::string& name, std::vector<int>*
     const char* line = c.pos();
     const long long n = c.integer("face vertex count");
     if (n < 3) c.fail(line, fmt::format("face has {} vertices (at least 3 needed)", n));
-    polygon.resize(static_cast<std::size_t>(n));
+    polygon.clear();  // grown as indices are read: a corrupt count is not allocated for
     for (long long k = 0; k < n; ++k) {
-      polygon[k] = c.integer("vertex index");
-      if (polygon[k] < 0 || polygon[k] >= nv)
-        c.fail(line, fmt::format("vertex index {} out of range (the file has {} vertices)", polygon[k], nv));
+      const long long index = c.integer("vertex index");
+      if (index < 0 || index >= nv)
+        c.fail(line, fmt::format("vertex index {} out of range (the file has {} vertices)", index, nv));
+      polygon.push_back(index);
     }
     float rgba[4];
     const bool coloured = read_colour(c, rgba);

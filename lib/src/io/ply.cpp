@@ -333,8 +333,8 @@ Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>*
             for (long long k = 0; k < n; ++k) in.scalar(p.type);
             continue;
           }
-          polygon.resize(static_cast<std::size_t>(n));
-          for (long long k = 0; k < n; ++k) polygon[k] = in.index(p.type);
+          polygon.clear();  // grown as indices are read: a corrupt count is not allocated for
+          for (long long k = 0; k < n; ++k) polygon.push_back(in.index(p.type));
           if (p.role == Role::FaceIndices) {
             if (n < 3)
               in.fail(fmt::format("face has {} vertex indices (at least 3 needed)", n));
