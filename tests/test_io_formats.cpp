@@ -103,6 +103,16 @@ TEST(Ply, FloatIndicesAreReadWhenWholeNumbers) {
   EXPECT_EQ(m.triangles.row(0), Eigen::RowVector3i(2, 0, 1));
 }
 
+TEST(Ply, ElementsWithoutPropertiesAreNotLoopedOver) {
+  // An element of 10^17 empty rows took a row loop that never ended (found by fuzzing).
+  const Mesh m = ply(
+      "ply\nformat ascii 1.0\nelement nothing 100000000000000000\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+      "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(m.num_vertices(), 3);
+  EXPECT_EQ(m.num_faces(), 1);
+}
+
 TEST(Ply, BigEndianBinaryWithIntCountsAndTriStrips) {
   std::string bytes =
       "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"

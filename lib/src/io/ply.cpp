@@ -321,6 +321,8 @@ Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>*
     if (is_face && face_colour) face_rgba.reserve(static_cast<std::size_t>(4 * e.count));
     if (is_face) tris.reserve(static_cast<std::size_t>(3 * e.count));
 
+    // Rows without properties hold nothing, and no file size bounds their count: not looped over.
+    if (e.properties.empty()) continue;
     Attributes& a = mesh.attributes;
     for (long long row = 0; row < e.count; ++row) {
       in.set_context(e, row);
