@@ -87,7 +87,7 @@ ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptio
   for (Index w = 0; w < nv; ++w) position[point_of[w]] = mesh.positions.row(w).transpose();
   for (Index p = 0; p < num_engine_points; ++p) ball[p] = {position[p], 0.0};
   std::vector<double> value(dims * static_cast<std::size_t>(nv));
-  for (Index w = 0; w < nv; ++w) copy_attributes(mesh, w, &value[dims * w]);
+  for (Index w = 0; w < nv; ++w) copy_attributes(mesh, w, value.data() + dims * w);
 
   const std::size_t nc = r.records.size();
   std::vector<std::array<Index, 3>> creation_corners(static_cast<std::size_t>(nf));
@@ -101,16 +101,16 @@ ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptio
     for (Index f : rec.removed_faces) creation_corners[f] = corners[f];
     removed_position[c] = position[rec.removed];
     for (Index w : point_wedges[rec.removed])
-      removed_values[c].insert(removed_values[c].end(), &value[dims * w], &value[dims * w] + dims);
+      removed_values[c].insert(removed_values[c].end(), value.data() + dims * w, value.data() + dims * (w + 1));
     for (const auto& [f, k, old] : rec.changed_corners) {
       const Index to = merged_into(rec, old);
       if (to < 0) throw Error("progressive mesh: internal error: a collapse record misses a wedge");
       corners[f][k] = to;
     }
     for (std::size_t i = 0; i < rec.attribute_vertices.size(); ++i) {
-      double* v = &value[dims * rec.attribute_vertices[i]];
+      double* v = value.data() + dims * rec.attribute_vertices[i];
       attributes_before[c].insert(attributes_before[c].end(), v, v + dims);  // input values stay bit-exact
-      std::copy_n(&rec.attributes_after[dims * i], dims, v);
+      std::copy_n(rec.attributes_after.data() + dims * i, dims, v);
     }
     position[rec.kept] = rec.kept_after;
     ball[rec.kept] = merge(ball[rec.kept], ball[rec.removed]);
@@ -174,7 +174,7 @@ ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptio
   pm.base_positions.resize(static_cast<std::size_t>(pm.base_points));
   for (Index i = 0; i < pm.base_points; ++i) pm.base_positions[i] = position[point_order[i]];
   for (Index i = 0; i < pm.base_wedges; ++i)
-    std::copy_n(&value[dims * pm.wedge_input[i]], dims, &pm.wedge_attributes[dims * i]);
+    std::copy_n(value.data() + dims * pm.wedge_input[i], dims, pm.wedge_attributes.data() + dims * i);
 
   pm.splits.resize(nc);
   Index next_wedge = pm.base_wedges;
@@ -190,7 +190,7 @@ ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptio
     s.num_wedges = static_cast<Index>(point_wedges[rec.removed].size());
     for (Index i = 0; i < s.num_wedges; ++i) {
       const Index w = point_wedges[rec.removed][i];
-      std::copy_n(&removed_values[c][dims * i], dims, &pm.wedge_attributes[dims * (next_wedge + i)]);
+      std::copy_n(removed_values[c].data() + dims * i, dims, pm.wedge_attributes.data() + dims * (next_wedge + i));
       // The parent: the kept wedge this one merged into (or, if it was unused then, the kept point's
       // first wedge; the .pm reader derives the same).
       const Index merged = merged_into(rec, w);
@@ -213,8 +213,9 @@ ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptio
     s.first_attribute_change = static_cast<Index>(pm.attribute_changes.size());
     for (std::size_t i = 0; i < rec.attribute_vertices.size(); ++i) {
       pm.attribute_changes.push_back({wid(rec.attribute_vertices[i]), static_cast<Index>(pm.attribute_values.size())});
-      pm.attribute_values.insert(pm.attribute_values.end(), &rec.attributes_after[dims * i], &rec.attributes_after[dims * (i + 1)]);
-      pm.attribute_values.insert(pm.attribute_values.end(), &before[dims * i], &before[dims * (i + 1)]);
+      pm.attribute_values.insert(pm.attribute_values.end(), rec.attributes_after.data() + dims * i,
+                                 rec.attributes_after.data() + dims * (i + 1));
+      pm.attribute_values.insert(pm.attribute_values.end(), before.data() + dims * i, before.data() + dims * (i + 1));
     }
     s.num_attribute_changes = static_cast<Index>(pm.attribute_changes.size()) - s.first_attribute_change;
   }
