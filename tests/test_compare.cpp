@@ -433,5 +433,25 @@ TEST(Compare, RefusesMoreSamplesThanMemoryHolds) {
   EXPECT_THROW(compare(box, box, {.samples = 0}), Error);
 }
 
+// The closest-point tree keeps boxes in float: a coordinate of 3e80 (a fuzzed OBJ) made NaN bins and
+// wrong answers. Refused by name; far from the origin but inside float range still measures.
+TEST(Compare, RefusesCoordinatesBeyondWhatItMeasures) {
+  Mesh far = make_box({});
+  far.positions(0, 0) = 3e80;
+  for (const char* method : {"compare", "simplify"}) {
+    try {
+      if (std::string(method) == "compare") compare(far, far);
+      else simplify(far, {.target_faces = 8});
+      ADD_FAILURE() << method << " measured a mesh at 3e80";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("a coordinate of 3e+80"), std::string::npos) << e.what();
+    }
+  }
+  Mesh big = make_box({});
+  big.positions *= 1e29;
+  const Comparison c = compare(big, big);
+  EXPECT_LT(c.hausdorff, 1e29 * 1e-12);  // rounding at that scale
+}
+
 }  // namespace
 }  // namespace lodkit
