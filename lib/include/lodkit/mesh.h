@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -44,8 +45,13 @@ struct Mesh {
   bool has_face_colours() const { return attributes.face_colours.rows() > 0; }
 };
 
-/// Checks the invariants every algorithm relies on: finite coordinates and attributes, indices in
-/// range, attribute row counts matching vertices (or faces). Cheap (one pass).
+/// The largest coordinate magnitude lodkit takes: a float's range, since the closest-point search
+/// keeps its boxes in float (and squared distances, areas and quadrics stay far from overflowing).
+inline constexpr double kLargestCoordinate = std::numeric_limits<float>::max();
+
+/// Checks the invariants every algorithm relies on: finite coordinates within ±kLargestCoordinate,
+/// finite attributes, indices in range, attribute row counts matching vertices (or faces). Cheap (one
+/// pass).
 /// \throw Error naming `context` (usually the file name) and the first problem found.
 void validate(const Mesh& mesh, const std::string& context = "mesh");
 

@@ -35,6 +35,13 @@ void check_finite(const Matrix& m, const char* what, const std::string& context)
 void validate(const Mesh& mesh, const std::string& context) {
   const Index n = mesh.num_vertices();
   check_finite(mesh.positions, "vertex", context);
+  for (Index v = 0; v < n; ++v) {
+    const double largest = mesh.positions.row(v).cwiseAbs().maxCoeff();
+    if (largest > kLargestCoordinate)
+      throw Error(fmt::format("{}: vertex {} has a coordinate of {:g}, beyond the range of a float (±{:g}) "
+                              "that lodkit computes in; scale the mesh down",
+                              context, v, largest, kLargestCoordinate));
+  }
   for (Index f = 0; f < mesh.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) {
       const Index v = mesh.triangles(f, k);

@@ -20,8 +20,6 @@ class AabbTree {
   // median subtree of up to kMostFaces faces takes 28 levels), which the searches' stack is sized for.
   static constexpr int kSurfaceAreaDepth = 40;
   static constexpr int kMostDepth = kSurfaceAreaDepth + 28;
-  // Coordinates further from the origin are refused: boxes are float (at most 3.4e38).
-  static constexpr double kLargestCoordinate = 1e30;
 
   struct Options {
     /// Keep a copy of every face's corners in the tree's order (72 bytes a face), which makes closest()

@@ -45,7 +45,11 @@ double box_area(const Eigen::AlignedBox3f& box) {
 
 // A centroid's bin of kBins along `axis`, from `low` at `scale` bins a unit.
 int bin_of(const Eigen::Vector3f& centre, int axis, float low, float scale) {
-  return std::clamp(static_cast<int>((centre[axis] - low) * scale), 0, kBins - 1);
+  // Clamped before the cast: across a float's whole range the product is infinite or NaN, and
+  // converting that to int is undefined.
+  const float at = (centre[axis] - low) * scale;
+  if (!(at > 0)) return 0;
+  return at >= kBins - 1 ? kBins - 1 : static_cast<int>(at);
 }
 
 // The bin below which the surface area heuristic splits, or -1 where no bin boundary splits the faces.
@@ -107,7 +111,7 @@ AabbTree::AabbTree(const Mesh& mesh, const Options& options) : mesh_(mesh) {
   for (Index f = 0; f < n; ++f)
     for (int k = 0; k < 3; ++k) largest = std::max(largest, mesh.positions.row(mesh.triangles(f, k)).cwiseAbs().maxCoeff());
   if (!(largest <= kLargestCoordinate))
-    throw Error(fmt::format("a coordinate of {:g} is beyond the ±{:g} within which lodkit measures distances; "
+    throw Error(fmt::format("a coordinate of {:g} is beyond the range of a float (±{:g}) that lodkit computes in; "
                             "scale the mesh down", largest, kLargestCoordinate));
   order_.resize(static_cast<std::size_t>(n));
   auto centroid = [&](Index f) {

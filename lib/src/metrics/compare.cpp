@@ -346,6 +346,8 @@ Comparison CompareReference::compare(const Mesh& other, std::optional<long long>
 }
 
 Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
+  validate(a, "compare: the first mesh");
+  validate(b, "compare: the second mesh");
   if (a.num_faces() == 0) throw Error("compare: the first mesh has no faces");
   if (b.num_faces() == 0) throw Error("compare: the second mesh has no faces");
   const long long samples = options.samples.value_or(default_face_samples(std::max(a.num_faces(), b.num_faces())));
