@@ -66,7 +66,7 @@ void simplify_every_way(const Mesh& mesh) {
     const ProgressiveMesh pm = build_progressive_mesh(mesh, options);
     const PmReadResult back = read_pm_from_memory(write_pm_to_memory(pm), "round trip");
     const Index finest = static_cast<Index>(pm.splits.size());
-    check_output(extract_level(back.pm, finest / 2).mesh, "pm level");
+    check_output(extract_level(back.pm, finest / 2).mesh, "pm level", finest / 2 == finest);
     const Mesh written = extract_level(pm, finest).mesh, read = extract_level(back.pm, finest).mesh;
     check_output(read, "pm finest level", true);  // the input again, degenerate faces and all
     if (written.positions != read.positions || written.triangles != read.triangles) {
@@ -78,6 +78,9 @@ void simplify_every_way(const Mesh& mesh) {
   try {
     CompareOptions options;
     options.samples = 2000;
+    // Coplanar faces overlapping with open edges (the same mesh twice, ties everywhere) take the
+    // certificate to its split limit, seconds under the sanitizers: a known limit, not a finding.
+    options.max_splits = 20000;
     (void)compare(mesh, mesh, options);
   } catch (const Error&) {
   }
