@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzzes lodkit's readers (and, with --deep, every method on what they read) with libFuzzer under
+# Fuzzes lodkit's readers and CSG trees (and, with --deep, every method on what they read) with libFuzzer under
 # AddressSanitizer and UndefinedBehaviorSanitizer. Not part of the test suite: run it by hand.
 #
 #   scripts/fuzz.sh                  # every target, 60 s each
@@ -18,7 +18,7 @@ if [ "${1:-}" = "--deep" ]; then deep=1; shift; fi
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(ply obj off stl drc pm)
+[ ${#targets[@]} -gt 0 ] || targets=(ply obj off stl drc pm csg)
 
 command -v clang++ >/dev/null || { echo "fuzz.sh: needs clang++ (apt-get install clang)" >&2; exit 2; }
 generator=()
@@ -61,6 +61,16 @@ if [ ! -f "$seeds/done" ]; then
   done
   $lodkit -q pm build "$seeds/sphere.ply" -o "$corpus/pm/sphere_hoppe.pm" --method hoppe --measure
   touch "$seeds/done"
+fi
+if [ ! -d "$corpus/csg" ]; then  # the bundled trees and one of each primitive
+  mkdir -p "$corpus/csg"
+  cp data/csg/*.json "$corpus/csg/"
+  echo '{"op": "union", "children": [{"primitive": "sphere", "radius": 0.6},
+    {"primitive": "torus", "major_radius": 1, "minor_radius": 0.2, "transform": {"scale": [1, 1, 2]}}]}' \
+    > "$corpus/csg/sphere_torus.json"
+  echo '{"op": "intersection", "children": [{"primitive": "cone", "radius": 1, "height": 2},
+    {"primitive": "cylinder", "radius": 0.5, "height": 3, "transform": {"rotate": {"euler": [90, 0, 0]}}}]}' \
+    > "$corpus/csg/cone_cylinder.json"
 fi
 
 found=0

@@ -345,10 +345,14 @@ CsgNode parse_csg(const std::string& json_text, const std::string& name, const s
   json j;
   try {
     j = json::parse(json_text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // a syntax error, or a number past a double (out_of_range)
     throw Error(fmt::format("{}: not valid JSON: {}", name, e.what()));
   }
-  return parse_node({name, base_dir}, j, "$");
+  try {
+    return parse_node({name, base_dir}, j, "$");
+  } catch (const json::exception& e) {  // a value of a type the checks above did not expect
+    throw Error(fmt::format("{}: {}", name, e.what()));
+  }
 }
 
 CsgNode read_csg(const std::filesystem::path& path) {
