@@ -62,6 +62,26 @@ std::vector<Probe> probes_near(const Mesh& m, int count, double offset, unsigned
 
 // With and without the tree's copy of the corners (whose faces are first ruled out by their own boxes),
 // split by surface area or at the median.
+// A triangle with a repeated corner is a segment: its closest point is the segment's. Each edge
+// region of the kernel divided by its edge's squared length, 0/0 for the repeated one, giving a NaN
+// point; `lodkit compare` on an STL of one such facet then found no nearest face and crashed (fuzzing).
+TEST(ClosestPointOnTriangle, ARepeatedCornerIsASegment) {
+  const Eigen::Vector3d a(0, 0, 0), c(2, 1, 0);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-2, 3);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d expected = a + detail::segment_parameter(p, a, c) * (c - a);
+    for (const auto& [x, y, z] : {std::array{a, a, c}, std::array{a, c, a}, std::array{c, a, a}, std::array{a, c, c}}) {
+      const Eigen::Vector3d q = detail::closest_point_on_triangle(p, x, y, z);
+      ASSERT_TRUE(q.allFinite()) << p.transpose();
+      EXPECT_NEAR((q - expected).norm(), 0.0, 1e-12) << p.transpose();
+    }
+  }
+  const Eigen::Vector3d p(1, 1, 1);
+  EXPECT_EQ(detail::closest_point_on_triangle(p, a, a, a), a);
+}
+
 TEST(AabbTree, ClosestMatchesBruteForceWhateverTheHint) {
   const Mesh torus = make_torus({});
   for (const AabbTree::Options& options : {AabbTree::Options{}, AabbTree::Options{.copy_corners = false},

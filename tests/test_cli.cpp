@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <fmt/format.h>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sys/wait.h>
@@ -254,6 +255,22 @@ TEST(CliCompare, CountsTheFacesOfBFacingAgainstA) {
   EXPECT_EQ(nlohmann::json::parse(r.out)["b_faces_against_a"].get<Index>(), turned);
   r = run(dir, "compare a.ply b.ply");
   EXPECT_NE(r.out.find(fmt::format("{} of B's {} faces face against", turned, b.num_faces())), std::string::npos) << r.out;
+}
+
+// An STL of one facet with two equal corners crashed compare (no face was nearest anything: the
+// closest-point kernel gave NaN for such a triangle); found by fuzzing. It is a segment: 0 apart.
+TEST(CliCompare, AMeshOfOneFaceWithARepeatedCornerIsMeasured) {
+  test::ScratchDir dir("cli-compare-repeated");
+  {
+    std::ofstream out(dir / "seg.stl");
+    out << "solid s\nfacet normal 0 0 0\nouter loop\nvertex 1 0 -1\nvertex 1 0 -1\nvertex 0.5 -0.8660254 -1\n"
+           "endloop\nendfacet\nendsolid s\n";
+  }
+  const CliRun r = run(dir, "compare seg.stl seg.stl --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto json = nlohmann::json::parse(r.out);
+  EXPECT_LT(json["hausdorff"].get<double>(), 1e-12);
+  EXPECT_LT(json["hausdorff_bound"].get<double>(), 1e-12);
 }
 
 TEST(CliCompare, ShadingNormalsAreReportedWhenBothMeshesHaveThem) {

@@ -26,14 +26,16 @@ inline Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const
   const double d3 = ab.dot(bp), d4 = ac.dot(bp);
   if (d3 >= 0 && d4 <= d3) return b;
   const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
+  // (Each edge region needs its edge to have length: for a triangle with a repeated corner the
+  // division was 0/0, a NaN point, and a mesh of one such face had no nearest face at all.)
+  if (vc <= 0 && d1 >= 0 && d3 <= 0 && d1 - d3 > 0) return a + (d1 / (d1 - d3)) * ab;
   const Eigen::Vector3d cp = p - c;
   const double d5 = ab.dot(cp), d6 = ac.dot(cp);
   if (d6 >= 0 && d5 <= d6) return c;
   const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0 && d2 - d6 > 0) return a + (d2 / (d2 - d6)) * ac;
   const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0 && (d4 - d3) + (d5 - d6) > 0)
     return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
   const double sum = va + vb + vc;
   if (!(sum > 0)) {  // degenerate (collinear) triangle: fall back to the closest of its edges
