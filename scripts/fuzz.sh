@@ -76,10 +76,12 @@ fi
 found=0
 for target in "${targets[@]}"; do
   echo "fuzz.sh: $target for $seconds s$([ $deep = 1 ] && [ "$target" != pm ] && echo ', deep')"
-  env_deep=()
-  [ $deep = 1 ] && env_deep=(LODKIT_FUZZ_DEEP=1)
+  env_deep=() timeout=30
+  # Deep runs simplify, build a progressive mesh and certify distances per input: under the
+  # sanitizers a few take tens of seconds (a third of a second without them).
+  [ $deep = 1 ] && env_deep=(LODKIT_FUZZ_DEEP=1) timeout=120
   if ! env "${env_deep[@]}" "build-fuzz/tests/fuzz/fuzz_$target" "$corpus/$target" -max_total_time="$seconds" \
-      -max_len=8192 -timeout=30 -rss_limit_mb=4096 -print_final_stats=1 \
+      -max_len=8192 -timeout="$timeout" -rss_limit_mb=4096 -print_final_stats=1 \
       -artifact_prefix="build-fuzz/findings/$target-" > "build-fuzz/$target.log" 2>&1; then
     found=1
     echo "fuzz.sh: $target: a finding, see build-fuzz/$target.log and build-fuzz/findings/" >&2
