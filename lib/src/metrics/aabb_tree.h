@@ -1,5 +1,7 @@
 #pragma once
 // A bounding-volume hierarchy over a mesh's triangles for closest-point queries.
+// Boxes are floats: the mesh's coordinates must lie within a float's range, as validate() requires
+// of every mesh a public entry point takes.
 #include <lodkit/mesh.h>
 
 #include <Eigen/Geometry>

@@ -105,14 +105,6 @@ int split(std::vector<Entry>& entries, int begin, int end, int depth) {
 AabbTree::AabbTree(const Mesh& mesh, const Options& options) : mesh_(mesh) {
   const Index n = mesh.num_faces();
   if (n > kMostFaces) throw Error(fmt::format("{} faces: the closest-point search takes at most {}", n, kMostFaces));
-  // Boxes are kept in float, and their centres and bins sum coordinates: past this they become
-  // infinite or NaN and the searches answer wrongly (a fuzzed mesh at 3e80 did).
-  double largest = 0;
-  for (Index f = 0; f < n; ++f)
-    for (int k = 0; k < 3; ++k) largest = std::max(largest, mesh.positions.row(mesh.triangles(f, k)).cwiseAbs().maxCoeff());
-  if (!(largest <= kLargestCoordinate))
-    throw Error(fmt::format("a coordinate of {:g} is beyond the range of a float (±{:g}) that lodkit computes in; "
-                            "scale the mesh down", largest, kLargestCoordinate));
   order_.resize(static_cast<std::size_t>(n));
   auto centroid = [&](Index f) {
     return Eigen::Vector3d((mesh.positions.row(mesh.triangles(f, 0)) + mesh.positions.row(mesh.triangles(f, 1)) +

@@ -315,6 +315,7 @@ struct CompareReference::State {
 std::vector<Index> charts_of(const Mesh& m) { return m.has_uvs() ? detail::uv_charts(m) : std::vector<Index>{}; }
 
 CompareReference::CompareReference(const Mesh& reference, long long face_samples, const CompareOptions& options) {
+  validate(reference, "compare: the first mesh");
   if (reference.num_faces() == 0) throw Error("compare: the first mesh has no faces");
   check_samples(face_samples);
   state_ = std::make_unique<State>(State{reference, face_samples, options, detail::AabbTree(reference),
@@ -325,6 +326,7 @@ CompareReference::CompareReference(const Mesh& reference, long long face_samples
 CompareReference::~CompareReference() = default;
 
 Comparison CompareReference::compare(const Mesh& other, std::optional<long long> other_face_samples) const {
+  validate(other, "compare: the second mesh");
   if (other.num_faces() == 0) throw Error("compare: the second mesh has no faces");
   const State& s = *state_;
   const long long other_samples = other_face_samples.value_or(s.face_samples);
@@ -364,6 +366,8 @@ Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options) 
 }
 
 Index count_flipped_faces(const Mesh& reference, const Mesh& mesh) {
+  validate(reference, "flipped faces: the reference mesh");
+  validate(mesh, "flipped faces: the mesh");
   if (reference.num_faces() == 0) return 0;
   const detail::AabbTree tree(reference);
   Index flipped = 0, hint = -1;

@@ -61,6 +61,7 @@ struct HausdorffChecker::State {
 };
 
 HausdorffChecker::HausdorffChecker(const Mesh& reference, long long max_splits) {
+  validate(reference, "Hausdorff check: the reference mesh");
   if (reference.num_faces() == 0) throw Error("Hausdorff check: the reference mesh has no faces");
   state_ = std::make_unique<State>(
       State{reference, max_splits, detail::AabbTree(reference), detail::face_neighbours(reference)});
@@ -69,6 +70,7 @@ HausdorffChecker::HausdorffChecker(const Mesh& reference, long long max_splits) 
 HausdorffChecker::~HausdorffChecker() = default;
 
 HausdorffCheck HausdorffChecker::check(const Mesh& other, double distance) const {
+  validate(other, "Hausdorff check: the other mesh");
   if (other.num_faces() == 0) throw Error("Hausdorff check: the other mesh has no faces");
   if (!std::isfinite(distance) || distance < 0)
     throw Error(fmt::format("Hausdorff check: the distance must be finite and not negative, got {}", distance));
