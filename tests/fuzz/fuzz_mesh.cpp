@@ -23,22 +23,22 @@ namespace {
 
 using namespace lodkit;
 
-// Finite positions and attributes, one attribute row per vertex, indices in range and (unless the
-// mesh is the input given back) no face repeating a vertex.
+// What validate() asks of every mesh (finite values within a float's range, indices in range, one
+// attribute row per vertex or face) and, unless the mesh is the input given back, no face repeating
+// a vertex.
 void check_output(const Mesh& m, const char* what, bool may_repeat_input_faces = false) {
-  const Index n = m.num_vertices();
-  bool ok = m.positions.allFinite();
-  for (Index f = 0; ok && f < m.num_faces(); ++f) {
-    const auto t = m.triangles.row(f);
-    for (int k = 0; k < 3; ++k) ok &= t[k] >= 0 && t[k] < n;
-    ok &= may_repeat_input_faces || (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
-  }
-  const Attributes& a = m.attributes;
-  ok &= (a.normals.rows() == 0 || a.normals.rows() == n) && (a.uvs.rows() == 0 || a.uvs.rows() == n) &&
-        (a.colours.rows() == 0 || a.colours.rows() == n) && a.normals.allFinite() && a.uvs.allFinite();
-  if (!ok) {
-    std::fprintf(stderr, "lodkit fuzz: invalid output from %s\n", what);
+  try {
+    validate(m, what);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "lodkit fuzz: invalid output: %s\n", e.what());
     std::abort();
+  }
+  for (Index f = 0; f < m.num_faces() && !may_repeat_input_faces; ++f) {
+    const auto t = m.triangles.row(f);
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+      std::fprintf(stderr, "lodkit fuzz: invalid output from %s: face %d repeats a vertex\n", what, f);
+      std::abort();
+    }
   }
 }
 
