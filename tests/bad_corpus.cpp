@@ -36,6 +36,9 @@ std::vector<BadFile> write_bad_corpus(const std::filesystem::path& dir) {
   add("binary.obj", std::string("\x00\x01\x02\x03\xff", 5), "no vertices");
   // Finite but beyond what squares and areas survive: hoppe's setup turned 3e231 into NaN (fuzzing).
   add("huge_coordinate.obj", "v 0 0 0\nv 1e80 0 0\nv 0 1 0\nf 1 2 3\n", "vertex 1 has a coordinate of 1e+80, beyond the range of a float");
+  // The first value that rounds to a float's infinity (3.40282347e38, which rounds to its largest, is in).
+  add("float_infinity_coordinate.obj", "v 0 0 0\nv 0 3.4028236e38 0\nv 0 0 1\nf 1 2 3\n",
+      "vertex 1 has a coordinate of 3.4028236e+38, beyond the range of a float");
   add("bad_uv_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n", "texture coordinate index 2");
 
   // PLY.

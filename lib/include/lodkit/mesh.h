@@ -47,7 +47,16 @@ struct Mesh {
 
 /// The largest coordinate magnitude lodkit takes: a float's range, since the closest-point search
 /// keeps its boxes in float (and squared distances, areas and quadrics stay far from overflowing).
-inline constexpr double kLargestCoordinate = std::numeric_limits<float>::max();
+/// Every double that rounds to a finite float is in: the largest float written to 9 digits,
+/// 3.40282347e38, lies a little above it and is what writers print for it.
+inline constexpr double kLargestCoordinate = 0x1.fffffefffffffp127;  // just below 2^128 - 2^103
+static_assert(kLargestCoordinate > std::numeric_limits<float>::max());
+
+/// Whether every coordinate of p lies within ±kLargestCoordinate. Algorithms that place vertices
+/// (an optimum can lie outside the input's box) keep to it, so their outputs can be written.
+inline bool within_coordinate_range(const Eigen::Vector3d& p) {
+  return p.cwiseAbs().maxCoeff() <= kLargestCoordinate;
+}
 
 /// Checks the invariants every algorithm relies on: finite coordinates within ±kLargestCoordinate,
 /// finite attributes, indices in range, attribute row counts matching vertices (or faces). Cheap (one

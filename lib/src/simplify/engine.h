@@ -54,6 +54,12 @@ struct EngineState {
   AttributeQuadrics attribute_quadrics;
   std::vector<double> wedge_value;  ///< k values per wedge
 
+  /// Whether a position relative to origin lies within the coordinates validate() takes. An optimum
+  /// can lie outside the input's box (by up to twice the edge's length), and near a float's range that
+  /// is an output nothing could write or read back.
+  bool representable(const Eigen::Vector3d& local) const {
+    return within_coordinate_range(local + origin);
+  }
   Index corner_point(Index f, int k) const { return face_point[f][k]; }
   bool has(Index p, PointFlag flag) const { return flags[p] & flag; }
   /// The side k of face f that joins points a and b (from corner k to k + 1, either way), or -1.

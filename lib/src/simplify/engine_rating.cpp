@@ -41,7 +41,8 @@ std::optional<HeapEntry> Engine::rate_edge(Index a, Index b, Index region, std::
   const bool ok_b = structure(b, a, fb, nullptr, pb) == Rejection::None;
   if (!ok_a && !ok_b) return std::nullopt;
   auto score = [&](Index u, Index v, Freedom f, const Probe& probe, Candidate& c) {
-    return cost_->score(s_, probe, u, v, f, c) && !(o_.max_error && c.error > *o_.max_error);
+    return cost_->score(s_, probe, u, v, f, c) && !(o_.max_error && c.error > *o_.max_error) &&
+           s_.representable(c.position);
   };
   Candidate ca, cb;
   const bool symmetric = ok_a && ok_b && fa == Freedom::Free && fb == Freedom::Free &&

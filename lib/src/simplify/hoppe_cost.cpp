@@ -186,10 +186,14 @@ class HoppeScorer {
         const Quadric q = s.quadric[u] + s.quadric[v];
         const Eigen::Vector3d mid = 0.5 * (s.position[u] + s.position[v]);
         Eigen::Vector3d best;
-        p = q.truncated_minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (s.position[u] - s.position[v]).norm() ? best : mid;
+        p = q.truncated_minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (s.position[u] - s.position[v]).norm() &&
+                    s.representable(best)
+                ? best
+                : mid;
       }
       e = energy(p, freedom == Freedom::Free), e_worst = worst;
-      if (freedom == Freedom::Free && solved_energy < e) e = solved_energy, p = solved, e_worst = solved_worst;
+      if (freedom == Freedom::Free && solved_energy < e && s.representable(solved))
+        e = solved_energy, p = solved, e_worst = solved_worst;
     }
     out.position = p;
     out.cost = e - before + (attribute_dims_ > 0 ? scalar_energy(s) - scalar_before_ : 0.0);

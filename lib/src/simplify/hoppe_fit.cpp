@@ -229,7 +229,8 @@ std::optional<double> fit_points(EngineState& s, FaceSamples& samples, const Bou
   if (solver.info() != Eigen::Success) return std::nullopt;
   const Eigen::MatrixX3d solved = solver.solve(rhs);
   if (solver.info() != Eigen::Success || !solved.allFinite()) return std::nullopt;
-  for (Index i = 0; i < n; ++i) s.position[point_of[i]] = solved.row(i).transpose();
+  for (Index i = 0; i < n; ++i)
+    if (s.representable(solved.row(i).transpose())) s.position[point_of[i]] = solved.row(i).transpose();
 
   return before;
 }

@@ -35,7 +35,9 @@ class QuadricCost final : public CostModel {
       // the unconstrained directions at the midpoint. Endpoints and midpoint stay as fallbacks.
       const Eigen::Vector3d mid = 0.5 * (pu + pv);
       Eigen::Vector3d best;
-      if (q.minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (pu - pv).norm() + 1e-12) consider(best, have);
+      if (q.minimiser_near(mid, best) && (best - mid).norm() <= 2.0 * (pu - pv).norm() + 1e-12 &&
+          s.representable(best))
+        consider(best, have);
       consider(mid, have);
       consider(pu, have);
       consider(pv, have);
