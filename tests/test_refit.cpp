@@ -8,6 +8,7 @@
 
 #include <map>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include "test_util.h"
 
@@ -205,6 +206,13 @@ TEST(Refit, SameResultForAnyNumberOfThreads) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
   refit_to_input(fine, many, {}, coarse.face_origin);
   EXPECT_EQ(one.positions, many.positions);
+  // The solve splits the points among as many tasks as the arena runs at once.
+  for (const int concurrency : {3, 5}) {
+    Mesh split = coarse.mesh;
+    tbb::task_arena arena(concurrency);
+    arena.execute([&] { refit_to_input(fine, split, {}, coarse.face_origin); });
+    EXPECT_EQ(one.positions, split.positions) << concurrency;
+  }
 }
 
 TEST(Refit, NoFaceComesToFaceAgainstTheInputOnAThinLens) {

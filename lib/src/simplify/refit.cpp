@@ -32,6 +32,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -334,7 +335,9 @@ class Refitter {
     Guard guard;
     for (const auto& [pulls, allowed] : {std::pair{&input_pulls_, &guard.input}, std::pair{&output_pulls_, &guard.output}}) {
       allowed->resize(pulls->size());
-      for (std::size_t s = 0; s < pulls->size(); ++s) (*allowed)[s] = std::max(limit, (*pulls)[s].distance) + 1e-9 * limit;
+      tbb::parallel_for(std::size_t{0}, pulls->size(), [&, pulls = pulls, allowed = allowed](std::size_t s) {
+        (*allowed)[s] = std::max(limit, (*pulls)[s].distance) + 1e-9 * limit;
+      });
     }
     return guard;
   }
@@ -347,16 +350,31 @@ class Refitter {
     for (int round = 0;; ++round) {
       bool within = true, sent_back = false;
       for (const auto& [pulls, allowed] : {std::pair{&input_pulls_, &guard.input}, std::pair{&output_pulls_, &guard.output}})
-        for (std::size_t s = 0; s < pulls->size(); ++s)
-          if ((*pulls)[s].distance > (*allowed)[s]) {
-            within = false;
-            for (const Index p : corners_[(*pulls)[s].face])
-              if (points_[p] != kept[p]) points_[p] = kept[p], sent_back = true;
-          }
+        for (const Index face : faces_past(*pulls, *allowed)) {
+          within = false;
+          for (const Index p : corners_[face])
+            if (points_[p] != kept[p]) points_[p] = kept[p], sent_back = true;
+        }
       if (within || !sent_back || round == kGuardRounds) return within;
       hold_back(kept);
       largest = sample(/*only_moved=*/true);
     }
+  }
+
+  // The faces of the samples farther than allowed (few: found side by side, a pass over every sample).
+  static std::vector<Index> faces_past(const std::vector<Pull>& pulls, const std::vector<double>& allowed) {
+    using Faces = std::vector<Index>;
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, pulls.size()), Faces{},
+        [&](const tbb::blocked_range<std::size_t>& range, Faces faces) {
+          for (std::size_t s = range.begin(); s != range.end(); ++s)
+            if (pulls[s].distance > allowed[s]) faces.push_back(pulls[s].face);
+          return faces;
+        },
+        [](Faces a, const Faces& b) {
+          a.insert(a.end(), b.begin(), b.end());
+          return a;
+        });
   }
 
   // Between the stages (avoid_inverted): faces facing against the input face nearest their centroid move
@@ -425,33 +443,43 @@ class Refitter {
 
   // Each point's least-squares move: the delta that would take its samples' distances to zero.
   void solve(double sampled_max, double exponent, std::vector<Vec>& step) const {
-    std::vector<Eigen::Matrix3d> normal_matrix(points_.size(), Eigen::Matrix3d::Zero());
-    std::vector<Vec> rhs(points_.size(), Vec::Zero());
-    std::vector<double> farthest(points_.size(), 0.0);
-    for (const auto* pulls : {&input_pulls_, &output_pulls_})
-      for (const Pull& pull : *pulls) {
-        if (pull.distance == 0) continue;
-        const double weight = exponent == 0 ? 1.0 : std::pow(pull.distance / sampled_max, exponent);
-        const Eigen::Matrix3d uu = pull.direction * pull.direction.transpose();
-        for (int k = 0; k < 3; ++k) {
-          const double b = pull.bary[k];
-          if (b <= 0) continue;
-          const Index p = corners_[pull.face][k];
-          normal_matrix[p] += weight * b * b * uu;
-          farthest[p] = std::max(farthest[p], pull.distance);
-          rhs[p] += weight * b * pull.distance * pull.direction;
+    const std::size_t n = points_.size();
+    std::vector<Eigen::Matrix3d> normal_matrix(n, Eigen::Matrix3d::Zero());
+    std::vector<Vec> rhs(n, Vec::Zero());
+    std::vector<double> farthest(n, 0.0);
+    // Side by side, each task summing for its own range of points over every sample, so each point's
+    // sums add up in sample order whatever the number of tasks (the same bits as one task).
+    const std::size_t tasks = std::clamp<std::size_t>(tbb::this_task_arena::max_concurrency(), 1, 16);
+    tbb::parallel_for(std::size_t{0}, tasks, [&](std::size_t task) {
+      const Index from = static_cast<Index>(n * task / tasks), to = static_cast<Index>(n * (task + 1) / tasks);
+      for (const auto* pulls : {&input_pulls_, &output_pulls_})
+        for (const Pull& pull : *pulls) {
+          if (pull.distance == 0) continue;
+          const auto& c = corners_[pull.face];
+          const auto mine = [&](int k) { return c[k] >= from && c[k] < to && !(pull.bary[k] <= 0); };
+          if (!mine(0) && !mine(1) && !mine(2)) continue;
+          const double weight = exponent == 0 ? 1.0 : std::pow(pull.distance / sampled_max, exponent);
+          const Eigen::Matrix3d uu = pull.direction * pull.direction.transpose();
+          for (int k = 0; k < 3; ++k) {
+            if (!mine(k)) continue;
+            const double b = pull.bary[k];
+            const Index p = c[k];
+            normal_matrix[p] += weight * b * b * uu;
+            farthest[p] = std::max(farthest[p], pull.distance);
+            rhs[p] += weight * b * pull.distance * pull.direction;
+          }
         }
-      }
-    for (std::size_t p = 0; p < points_.size(); ++p) {
+    });
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t p) {
       step[p].setZero();
       const double trace = normal_matrix[p].trace();
-      if (fixed_[p] || !(trace > 0)) continue;
+      if (fixed_[p] || !(trace > 0)) return;
       // Regularised: directions no sample constrains (along a flat surface) stay put.
       step[p] = (normal_matrix[p] + 1e-3 * trace * Eigen::Matrix3d::Identity()).ldlt().solve(rhs[p]);
       if (!step[p].allFinite()) step[p].setZero();  // (huge or tiny coordinates)
       // No farther than its farthest sample: a poorly constrained solve can ask for far more.
       if (const double length = step[p].norm(); length > farthest[p]) step[p] *= farthest[p] / length;
-    }
+    });
   }
 
   // points = kept + scale * step, less what hold_back() sends back.
