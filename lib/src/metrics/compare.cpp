@@ -37,6 +37,7 @@ struct SampleSet {
   };
   std::vector<Point> points;
   std::vector<Sample> samples;
+  std::size_t first_face_point = 0;  // points before it are vertices and edge midpoints
   std::vector<std::uint32_t> vertex_point;  // each vertex's point (kNone for a vertex no face uses)
 
   void add_unique(const Eigen::Vector3d& p, Index f, double weight) {
@@ -115,6 +116,7 @@ SampleSet sample_surface(const Mesh& m, long long face_samples) {
   out.points.reserve(static_cast<std::size_t>(face_samples + 3 * nf));
   // Vertices and edge points: where maxima of piecewise-linear distances often sit.
   sample_vertices_and_edges(m, out);
+  out.first_face_point = out.points.size();
   // Face interiors, allotted by area with a running remainder so the total is exact.
   double carry = 0;
   for (Index f = 0; f < nf; ++f) {
@@ -150,10 +152,17 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / std::numbers::pi;
 }
 
-// Each distinct point's distance to `to`, and the angle between its face's normal and the normal of
-// the face it is closest to.
+std::vector<Eigen::Vector3d> face_normals(const Mesh& m) {
+  std::vector<Eigen::Vector3d> normals(static_cast<std::size_t>(m.num_faces()));
+  tbb::parallel_for(Index{0}, m.num_faces(), [&](Index f) { normals[f] = face_normal(m, f); });
+  return normals;
+}
+
+// Each distinct point's distance to `to`, and at face samples (the only ones whose normals are compared)
+// the angle between its face's normal and the normal of the face it is closest to.
 std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh& to, const detail::AabbTree& tree) {
   std::vector<Measured> result(set.points.size());
+  const std::vector<Eigen::Vector3d> from_normals = face_normals(from), to_normals = face_normals(to);
   const bool colours = from.has_colours() && to.has_colours();
   const bool normals = from.has_normals() && to.has_normals();
   const bool uvs = from.has_uvs() && to.has_uvs();
@@ -178,9 +187,13 @@ std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh
         }
       }
       // (A face without area has a zero normal, which counts 0 degrees here.)
-      const Eigen::Vector3d n0 = face_normal(from, p.face), n1 = face_normal(to, hit.face);
-      result[i] = {std::sqrt(hit.squared_distance), std::atan2(n0.cross(n1).norm(), n0.dot(n1)) * 180.0 / std::numbers::pi,
-                   hit.face, colour, shading, uv, uv_near};
+      double angle = 0;
+      if (i >= set.first_face_point) {
+        const Eigen::Vector3d& n0 = from_normals[p.face];
+        const Eigen::Vector3d& n1 = to_normals[hit.face];
+        angle = std::atan2(n0.cross(n1).norm(), n0.dot(n1)) * 180.0 / std::numbers::pi;
+      }
+      result[i] = {std::sqrt(hit.squared_distance), angle, hit.face, colour, shading, uv, uv_near};
     }
   });
   return result;
