@@ -39,11 +39,6 @@ struct SampleSet {
   std::vector<Sample> samples;
   std::size_t first_face_point = 0;  // points before it are vertices and edge midpoints
   std::vector<std::uint32_t> vertex_point;  // each vertex's point (kNone for a vertex no face uses)
-
-  void add_unique(const Eigen::Vector3d& p, Index f, double weight) {
-    samples.push_back({static_cast<std::uint32_t>(points.size()), f, weight});
-    points.push_back({p, f});
-  }
 };
 
 Eigen::Vector3d corner(const Mesh& m, Index f, int k) { return m.positions.row(m.triangles(f, k)); }
@@ -54,15 +49,18 @@ Eigen::Vector3d face_normal(const Mesh& m, Index f) {
   return len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
 }
 
-// k stratified points inside face f: the R2 sequence folded into the triangle.
-void sample_face(const Mesh& m, Index f, long long k, double weight, SampleSet& out) {
+// k stratified points inside face f, each a sample of its own, into out's points from `point` on and
+// its samples from `sample` on: the R2 sequence folded into the triangle.
+void sample_face(const Mesh& m, Index f, std::size_t point, std::size_t sample, std::size_t k, double weight,
+                 SampleSet& out) {
   const Eigen::Vector3d a = corner(m, f, 0), b = corner(m, f, 1), c = corner(m, f, 2);
   constexpr double g1 = 0.7548776662466927, g2 = 0.5698402909980532;  // R2 (plastic number)
-  for (long long j = 0; j < k; ++j) {
+  for (std::size_t j = 0; j < k; ++j) {
     double u = std::fmod(0.5 + g1 * static_cast<double>(j + 1), 1.0);
     double v = std::fmod(0.5 + g2 * static_cast<double>(j + 1), 1.0);
     if (u + v > 1) u = 1 - u, v = 1 - v;
-    out.add_unique(a + u * (b - a) + v * (c - a), f, weight / static_cast<double>(k));
+    out.points[point + j] = {a + u * (b - a) + v * (c - a), f};
+    out.samples[sample + j] = {static_cast<std::uint32_t>(point + j), f, weight / static_cast<double>(k)};
   }
 }
 
@@ -117,15 +115,23 @@ SampleSet sample_surface(const Mesh& m, long long face_samples) {
   // Vertices and edge points: where maxima of piecewise-linear distances often sit.
   sample_vertices_and_edges(m, out);
   out.first_face_point = out.points.size();
-  // Face interiors, allotted by area with a running remainder so the total is exact.
+  // Face interiors, allotted by area with a running remainder so the total is exact, each face's
+  // after the faces before it; then placed side by side.
+  std::vector<std::size_t> first(static_cast<std::size_t>(nf) + 1, 0);
   double carry = 0;
   for (Index f = 0; f < nf; ++f) {
     const double share = total > 0 ? face_samples * area[f] / total : double(face_samples) / nf;
     carry += share;
     const auto k = static_cast<long long>(std::floor(carry));
     carry -= static_cast<double>(k);
-    sample_face(m, f, std::max<long long>(k, 1), area[f], out);
+    first[f + 1] = first[f] + static_cast<std::size_t>(std::max<long long>(k, 1));
   }
+  const std::size_t first_face_sample = out.samples.size();
+  out.points.resize(out.first_face_point + first[nf]);
+  out.samples.resize(first_face_sample + first[nf]);
+  tbb::parallel_for(Index{0}, nf, [&](Index f) {
+    sample_face(m, f, out.first_face_point + first[f], first_face_sample + first[f], first[f + 1] - first[f], area[f], out);
+  });
   return out;
 }
 
