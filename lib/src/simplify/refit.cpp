@@ -256,10 +256,18 @@ class Refitter {
     ++report.passes;
     return sample(/*only_moved=*/false, keep_face_below);
   }
+  // Side by side in a split fixed by the sample count alone (parallel_deterministic_reduce), so the
+  // same bits for any number of threads.
   double sum_of_squares() const {
     double sum = 0;
     for (const auto* pulls : {&input_pulls_, &output_pulls_})
-      for (const Pull& pull : *pulls) sum += pull.distance * pull.distance;
+      sum += tbb::parallel_deterministic_reduce(
+          tbb::blocked_range<std::size_t>(0, pulls->size(), 16384), 0.0,
+          [pulls = pulls](const tbb::blocked_range<std::size_t>& range, double part) {
+            for (std::size_t s = range.begin(); s != range.end(); ++s) part += (*pulls)[s].distance * (*pulls)[s].distance;
+            return part;
+          },
+          std::plus<double>());
     return sum;
   }
   double sampled_rms(double sum) const { return std::sqrt(sum / std::max<std::size_t>(1, input_pulls_.size() + output_pulls_.size())); }
