@@ -501,7 +501,7 @@ Examples:
   lodkit simplify human.obj -o human_lo.obj --ratio 0.1 --no-attribute-fit   # normals as the collapses left them
   lodkit simplify horse.ply -o horse_lo.ply --ratio 0.1 --inverted-faces refuse --measure
   lodkit simplify scan_1M.ply -o scan_lo.ply --ratio 0.1 --inverted-faces allow   # faster; faces may face against the input
-  lodkit simplify scan.ply -o scan_fast.ply --ratio 0.1 --refit-passes 0   # 5-8x faster; errors as the collapses left them
+  lodkit simplify scan.ply -o scan_fast.ply --ratio 0.1 --refit-passes 0   # 2-4x faster; errors as the collapses left them
   lodkit simplify scan.ply -o scan_h.ply --ratio 0.1 --refit-rms-passes 0  # the refit for the largest distances only
   lodkit simplify bunny.ply -o bunny_h.ply --ratio 0.1 --method hoppe --refit-rms-passes 8   # hoppe, RMS fitted after
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
