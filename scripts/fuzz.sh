@@ -8,7 +8,7 @@
 #
 # Needs clang (Debian 12: apt-get install clang). Builds into build-fuzz/, seeds each target's
 # corpus with small meshes the CLI generates (build-fuzz/corpus/<target>, kept between runs, so later
-# runs start where earlier ones stopped), and writes any finding to build-fuzz/findings/. Exits 1 if
+# runs start where earlier ones stopped; deep runs keep build-fuzz/corpus-deep/<target>), and writes any finding to build-fuzz/findings/. Exits 1 if
 # there is one; reproduce it with build-fuzz/tests/fuzz/fuzz_<target> <file>. See docs/fuzzing.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -76,11 +76,19 @@ fi
 found=0
 for target in "${targets[@]}"; do
   echo "fuzz.sh: $target for $seconds s$([ $deep = 1 ] && [ "$target" != pm ] && echo ', deep')"
-  env_deep=() timeout=30
+  env_deep=() timeout=30 target_corpus="$corpus/$target"
   # Deep runs simplify, build a progressive mesh and certify distances per input: under the
-  # sanitizers a few take tens of seconds (a third of a second without them).
-  [ $deep = 1 ] && env_deep=(LODKIT_FUZZ_DEEP=1) timeout=120
-  if ! env "${env_deep[@]}" "build-fuzz/tests/fuzz/fuzz_$target" "$corpus/$target" -max_total_time="$seconds" \
+  # sanitizers a few take tens of seconds (a third of a second without them). They keep a corpus of
+  # their own, seeded with the generated files alone: run once through the readers' corpus (hundreds
+  # of files grown by coverage of the parsers), they spent half an hour before mutating anything.
+  if [ $deep = 1 ]; then
+    env_deep=(LODKIT_FUZZ_DEEP=1) timeout=120 target_corpus="build-fuzz/corpus-deep/$target"
+    if [ ! -d "$target_corpus" ]; then
+      mkdir -p "$target_corpus"
+      find "$corpus/$target" -maxdepth 1 -type f ! -regex '.*/[0-9a-f]\{40\}' -exec cp {} "$target_corpus/" \;
+    fi
+  fi
+  if ! env "${env_deep[@]}" "build-fuzz/tests/fuzz/fuzz_$target" "$target_corpus" -max_total_time="$seconds" \
       -max_len=8192 -timeout="$timeout" -rss_limit_mb=4096 -print_final_stats=1 \
       -artifact_prefix="build-fuzz/findings/$target-" > "build-fuzz/$target.log" 2>&1; then
     found=1
