@@ -456,8 +456,9 @@ class Refitter {
     std::vector<Vec> rhs(n, Vec::Zero());
     std::vector<double> farthest(n, 0.0);
     // Side by side, each task summing for its own range of points over every sample, so each point's
-    // sums add up in sample order whatever the number of tasks (the same bits as one task).
-    const std::size_t tasks = std::clamp<std::size_t>(tbb::this_task_arena::max_concurrency(), 1, 16);
+    // sums add up in sample order whatever the number of tasks (the same bits as one task). Every task
+    // reads every sample, so more than a few would read more than they save.
+    const std::size_t tasks = std::clamp<std::size_t>(tbb::this_task_arena::max_concurrency(), 1, 4);
     tbb::parallel_for(std::size_t{0}, tasks, [&](std::size_t task) {
       const Index from = static_cast<Index>(n * task / tasks), to = static_cast<Index>(n * (task + 1) / tasks);
       for (const auto* pulls : {&input_pulls_, &output_pulls_})
