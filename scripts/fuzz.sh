@@ -85,7 +85,7 @@ for target in "${targets[@]}"; do
     env_deep=(LODKIT_FUZZ_DEEP=1) timeout=120 target_corpus="build-fuzz/corpus-deep/$target"
     if [ ! -d "$target_corpus" ]; then
       mkdir -p "$target_corpus"
-      find "$corpus/$target" -maxdepth 1 -type f ! -regex '.*/[0-9a-f]\{40\}' -exec cp {} "$target_corpus/" \;
+      find "$corpus/$target" -maxdepth 1 -type f -regextype posix-extended ! -regex '.*/[0-9a-f]{40}' -exec cp {} "$target_corpus/" \;
     fi
   fi
   if ! env "${env_deep[@]}" "build-fuzz/tests/fuzz/fuzz_$target" "$target_corpus" -max_total_time="$seconds" \
