@@ -37,11 +37,10 @@ void validate(const Mesh& mesh, const std::string& context) {
   check_finite(mesh.positions, "vertex", context);
   for (Index v = 0; v < n; ++v) {
     const Eigen::Vector3d p = mesh.positions.row(v).transpose();
-    const double largest = p.cwiseAbs().maxCoeff();
     if (!within_coordinate_range(p))
       throw Error(fmt::format("{}: vertex {} has a coordinate of {}, beyond the range of a float (±{:.8g}) "
                               "that lodkit computes in; scale the mesh down",
-                              context, v, largest, std::numeric_limits<float>::max()));
+                              context, v, p.cwiseAbs().maxCoeff(), std::numeric_limits<float>::max()));
   }
   for (Index f = 0; f < mesh.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) {
