@@ -36,21 +36,24 @@ Mesh read_input(const std::string& path, const std::optional<std::string>& forma
   return read_mesh(path, with_format);
 }
 
-void refuse_to_overwrite(const std::string& path, const std::string& input) {
+void refuse_to_overwrite(const std::string& path, const std::vector<std::string>& inputs) {
   std::error_code ec;
-  if (!input.empty() && input != "-" && path != "-" && fs::exists(path, ec) && fs::equivalent(path, input, ec))
-    throw Error(fmt::format("{}: refusing to overwrite the input file; choose another output path", path));
+  if (path == "-" || !fs::exists(path, ec)) return;
+  for (const std::string& input : inputs)
+    if (!input.empty() && input != "-" && fs::equivalent(path, input, ec))
+      throw Error(fmt::format("{}: refusing to overwrite the input file{}; choose another output path", path,
+                              input == path ? "" : fmt::format(" {}", input)));
 }
 
 void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,
-                  const WriteOptions& options, const std::string& input) {
+                  const WriteOptions& options, const std::vector<std::string>& inputs) {
   if (path == "-") {
     const std::string bytes = write_mesh_to_memory(mesh, stream_format(format, "<stdout>"), options);
     std::fwrite(bytes.data(), 1, bytes.size(), stdout);
     std::fflush(stdout);
     return;
   }
-  refuse_to_overwrite(path, input);
+  refuse_to_overwrite(path, inputs);
   WriteOptions with_format = options;
   if (format) with_format.format = stream_format(format, path.c_str());
   write_mesh(mesh, path, with_format);

@@ -38,13 +38,13 @@ Command add_subdivide_command(CLI::App& app, const GlobalOptions& global);
 Mesh read_input(const std::string& path, const std::optional<std::string>& format,
                 const ReadOptions& options = {});
 
-/// Throws if `path` names the same file as `input` (under any name); "-" and "" are never files.
-void refuse_to_overwrite(const std::string& path, const std::string& input);
+/// Throws if `path` names the same file as one of `inputs` (under any name); "-" and "" are never files.
+void refuse_to_overwrite(const std::string& path, const std::vector<std::string>& inputs);
 
 /// Writes to `path` atomically, or to stdout when it is "-" (then `format` names the format).
-/// Refuses to write over `input` (the same file under any name) unless it is empty.
+/// Refuses to write over any of `inputs` (the same file under any name).
 void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,
-                  const WriteOptions& options, const std::string& input = {});
+                  const WriteOptions& options, const std::vector<std::string>& inputs = {});
 
 /// "12,345"
 std::string thousands(long long n);

@@ -171,6 +171,27 @@ TEST(Cli, RefusesToOverwriteTheInput) {
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("refusing to overwrite the input"), std::string::npos) << r.err;
   EXPECT_EQ(test::read_bytes(dir / "box.ply"), before);
+
+  // Every input counts, not only the first: a boolean's second mesh, a mesh a CSG tree reads (its path
+  // relative to the tree's file), the tree itself, the mesh a level is proved against.
+  ASSERT_EQ(run(dir, "generate sphere -o ball.ply --segments 12 --rings 8").status, 0);
+  ASSERT_EQ(run(dir, "pm build ball.ply -o ball.pm").status, 0);
+  std::filesystem::create_directory(dir / "parts");
+  std::filesystem::copy_file(dir / "box.ply", dir / "parts" / "box.ply");
+  test::write_text(dir / "parts" / "tree.json",
+                   R"({"op": "union", "children": [{"mesh": "box.ply"}, {"primitive": "sphere", "radius": 0.7}]})");
+  std::filesystem::copy_file(dir / "parts" / "tree.json", dir / "tree.ply");
+  const std::string ball = test::read_bytes(dir / "ball.ply"), tree = test::read_bytes(dir / "tree.ply");
+  for (const char* command : {"csg union box.ply ball.ply -o ball.ply", "csg difference box.ply ball.ply -o ./ball.ply",
+                              "csg tree parts/tree.json -o parts/box.ply", "csg tree parts/tree.json -o parts/../parts/box.ply",
+                              "csg tree tree.ply -o tree.ply", "pm extract ball.pm -o ball.ply --max-error 0.05 --prove-with ball.ply"}) {
+    const CliRun refused = run(dir, command);
+    EXPECT_EQ(refused.status, 1) << command;
+    EXPECT_NE(refused.err.find("refusing to overwrite the input"), std::string::npos) << command << ": " << refused.err;
+  }
+  EXPECT_TRUE(test::read_bytes(dir / "parts" / "box.ply") == before);
+  EXPECT_TRUE(test::read_bytes(dir / "ball.ply") == ball);
+  EXPECT_TRUE(test::read_bytes(dir / "tree.ply") == tree);
 }
 
 TEST(Cli, BadInputCorpusExitsOneNamingTheFileAndWritesNothing) {

@@ -45,7 +45,7 @@ int run_convert(const ConvertOptions& o, const GlobalOptions& global) {
   w.colours = !o.no_colours;
   if (o.quantize) w.draco.position_bits = *o.quantize;
   w.draco.compression_level = o.compression_level;
-  write_output(mesh, output, o.to, w, o.input);
+  write_output(mesh, output, o.to, w, {o.input});
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!global.quiet)
     fmt::print(stderr, "convert: {} -> {}: {} vertices ({} in), {} faces, {:.3f} s\n", o.input, output,

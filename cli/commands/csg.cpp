@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "common.h"
 
@@ -29,6 +31,17 @@ void report(const GlobalOptions& global, bool as_json, const std::string& what, 
     fmt::print(stderr, "csg {}: {} faces, volume {:.9g}, {:.3f} s{} -> {}\n", what, thousands(mesh.num_faces()), volume, seconds,
                used_exact ? " (exact constructions)" : "", output);
   }
+}
+
+// The tree's file and every mesh file it reads: none may be the output.
+std::vector<std::string> files_read(const std::string& tree_file, const CsgNode& root) {
+  std::vector<std::string> files{tree_file};
+  auto visit = [&](const CsgNode& node, auto&& self) -> void {
+    if (node.kind == CsgNode::Kind::MeshFile) files.push_back(node.mesh.string());
+    for (const CsgNode& child : node.children) self(child, self);
+  };
+  visit(root, visit);
+  return files;
 }
 
 }  // namespace
@@ -71,15 +84,19 @@ Example:
   return {sub, [opt, ops, tree, &global] {
             for (const auto& [app_op, op] : ops) {
               if (!app_op->parsed()) continue;
+              refuse_to_overwrite(opt->output, {opt->a, opt->b});  // before reading: fail fast
               const Mesh a = read_input(opt->a, std::nullopt), b = read_input(opt->b, std::nullopt);
               const BooleanResult r = boolean(a, b, op, {.exact = opt->exact}, opt->a, opt->b);
-              write_output(r.mesh, opt->output, opt->format, WriteOptions{}, opt->a);
+              write_output(r.mesh, opt->output, opt->format, WriteOptions{}, {opt->a, opt->b});
               report(global, opt->json, to_string(op), opt->output, r.mesh, r.volume, r.seconds, r.warnings, r.used_exact);
               return 0;
             }
             if (!tree->parsed()) return 2;
-            const CsgResult r = evaluate(read_csg(opt->tree), {.tolerance = opt->tolerance, .exact = opt->exact, .split_at_parts = opt->split_at_parts});
-            write_output(r.mesh, opt->output, opt->format, WriteOptions{});
+            const CsgNode root = read_csg(opt->tree);
+            const std::vector<std::string> inputs = files_read(opt->tree, root);
+            refuse_to_overwrite(opt->output, inputs);
+            const CsgResult r = evaluate(root, {.tolerance = opt->tolerance, .exact = opt->exact, .split_at_parts = opt->split_at_parts});
+            write_output(r.mesh, opt->output, opt->format, WriteOptions{}, inputs);
             report(global, opt->json, fmt::format("tree ({} primitives, {} operations)", r.primitives, r.operations), opt->output,
                    r.mesh, r.volume, r.seconds, r.warnings, false);
             return 0;

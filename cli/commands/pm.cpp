@@ -41,7 +41,7 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   // Flat shading splits every vertex by its normals: every edge is then a seam and nothing collapses.
   const bool had_normals = mesh.has_normals();
   if (o.drop_normals) mesh.attributes.normals.resize(0, 3);
-  refuse_to_overwrite(o.output, o.input);
+  refuse_to_overwrite(o.output, {o.input});
   // Faces that disagree on orientation lock their shared edges' ends: turned first, as simplify turns
   // them, so that the stream's full level is the turned input.
   const Index reoriented = o.keep_orientation ? 0 : orient_consistently(mesh);
@@ -204,7 +204,8 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
 }
 
 int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
-  refuse_to_overwrite(o.output, o.input);  // before reading: fail fast
+  const std::vector<std::string> inputs{o.input, o.prove_with.value_or("")};
+  refuse_to_overwrite(o.output, inputs);  // before reading: fail fast
   const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
   if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
   if (o.prove_with && !o.max_error && !o.pixel_error)
@@ -249,7 +250,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
     fit = fit_attributes_to_input(finest, e.mesh);
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  write_output(e.mesh, o.output, o.format, WriteOptions{}, o.input);
+  write_output(e.mesh, o.output, o.format, WriteOptions{}, inputs);
   const double bound = r.pm.level_error[static_cast<std::size_t>(level)];
   const bool measured = !r.pm.measured.empty();
   const double measured_error = level_error(r.pm, level, LevelErrorKind::Measured);
@@ -281,7 +282,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
 }
 
 int run_geomorph(const PmCliOptions& o, const GlobalOptions& global) {
-  refuse_to_overwrite(o.output, o.input);  // before reading: fail fast
+  refuse_to_overwrite(o.output, {o.input});  // before reading: fail fast
   const PmReadResult r = read_pm(o.input);
   warn(r, global);
   const ProgressiveMesh& pm = r.pm;
@@ -292,7 +293,7 @@ int run_geomorph(const PmCliOptions& o, const GlobalOptions& global) {
   const Geomorph g = make_geomorph(pm, from, to, o.input_order ? VertexOrder::Input : VertexOrder::Stream);
   if (o.alpha) {
     if (!(*o.alpha >= 0 && *o.alpha <= 1)) throw Error("pm geomorph: --alpha must be in [0, 1]");
-    write_output(g.at(*o.alpha), o.output, o.format, WriteOptions{}, o.input);
+    write_output(g.at(*o.alpha), o.output, o.format, WriteOptions{}, {o.input});
   } else {
     // morph.ply -> morph_000.ply ... morph_NNN.ply, alpha from 0 to 1.
     const fs::path out(o.output);
@@ -301,7 +302,7 @@ int run_geomorph(const PmCliOptions& o, const GlobalOptions& global) {
       const double alpha = o.frames == 1 ? 1.0 : double(i) / double(o.frames - 1);
       g.evaluate(alpha, frame);
       const fs::path path = out.parent_path() / fmt::format("{}_{:03d}{}", out.stem().string(), i, out.extension().string());
-      write_output(frame, path.string(), o.format, WriteOptions{}, o.input);
+      write_output(frame, path.string(), o.format, WriteOptions{}, {o.input});
     }
   }
   if (!global.quiet)

@@ -178,7 +178,7 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   if (o.no_inverted_faces) d.inverted_faces = InvertedFaces::Refuse;
   DecimateResult r = decimate(mesh, d);
   if (o.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
-  write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
+  write_output(r.mesh, o.output, o.format, WriteOptions{}, {o.input});
   std::optional<Measured> measured;
   if (o.measure) measured = measure(mesh, r.mesh, r.reoriented_faces);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
@@ -273,7 +273,7 @@ int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
                  "any error can fill the screen: the output is the input\n", o.distance, 0.5 * diagonal);
   }
   const SimplifyResult r = limit ? simplify_within(mesh, *limit, s) : simplify(mesh, s);
-  write_output(r.mesh, o.output, o.format, WriteOptions{}, o.input);
+  write_output(r.mesh, o.output, o.format, WriteOptions{}, {o.input});
 
   std::optional<Measured> measured;
   if (o.measure) measured = measure(mesh, r.mesh, r.reoriented_faces);

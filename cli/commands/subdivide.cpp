@@ -74,13 +74,13 @@ Catmull-Clark output quads are split along their shorter diagonal (lodkit meshes
               s.tolerance = tolerance.value;
               s.tolerance_is_relative = tolerance.relative;
             }
-            refuse_to_overwrite(o.output, o.input);
+            refuse_to_overwrite(o.output, {o.input});
             std::vector<int> polygon_sizes;
             ReadOptions read;
             read.polygon_sizes = &polygon_sizes;
             const Mesh mesh = read_input(o.input, o.input_format, read);
             const SubdivideResult result = subdivide(mesh, s, polygon_sizes);
-            write_output(result.mesh, o.output, o.format, WriteOptions{}, o.input);
+            write_output(result.mesh, o.output, o.format, WriteOptions{}, {o.input});
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             if (!global.quiet) {
               fmt::print(stderr, "subdivide: {} -> {}: {} x {} level{}, {} -> {} faces, {:.3f} s\n", o.input, o.output,

@@ -88,7 +88,7 @@ terrain's points bit for bit. PLY output is streamed (float32 positions, per-fac
             o.terrain.edge_direction = o.edge_direction == "up"        ? EdgeDirection::Up
                                        : o.edge_direction == "normals" ? EdgeDirection::FaceNormals
                                                                        : EdgeDirection::Auto;
-            if (o.base != "grid" && o.base != "pyramid") refuse_to_overwrite(o.output, o.base);
+            if (o.base != "grid" && o.base != "pyramid") refuse_to_overwrite(o.output, {o.base});
             const Mesh base = load_base(o);
             std::int64_t vertices = 0, faces = 0;
             if (streams_ply(o)) {
