@@ -45,6 +45,11 @@ void refuse_to_overwrite(const std::string& path, const std::vector<std::string>
                               input == path ? "" : fmt::format(" {}", input)));
 }
 
+void refuse_json_beside_stdout(bool json, const std::string& output) {
+  if (json && output == "-")
+    throw Error("<stdout>: --json prints there, and so does the output (-): give the output a file name");
+}
+
 void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,
                   const WriteOptions& options, const std::vector<std::string>& inputs) {
   if (path == "-") {

@@ -41,6 +41,9 @@ Mesh read_input(const std::string& path, const std::optional<std::string>& forma
 /// Throws if `path` names the same file as one of `inputs` (under any name); "-" and "" are never files.
 void refuse_to_overwrite(const std::string& path, const std::vector<std::string>& inputs);
 
+/// Throws when `--json` would print on stdout beside a mesh or stream written there (`output` is "-").
+void refuse_json_beside_stdout(bool json, const std::string& output);
+
 /// Writes to `path` atomically, or to stdout when it is "-" (then `format` names the format).
 /// Refuses to write over any of `inputs` (the same file under any name).
 void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,

@@ -194,6 +194,50 @@ TEST(Cli, RefusesToOverwriteTheInput) {
   EXPECT_TRUE(test::read_bytes(dir / "tree.ply") == tree);
 }
 
+TEST(Cli, StreamsGoThroughStdinAndStdout) {
+  test::ScratchDir dir("cli");
+  ASSERT_EQ(run(dir, "generate torus -o t.ply --major-segments 16 --minor-segments 8").status, 0);
+  // A .pm stream to stdout is the file's bytes (it was written to a file named "-"), and every pm
+  // command reads one from stdin.
+  ASSERT_EQ(run(dir, "pm build t.ply -o t.pm").status, 0);
+  CliRun r = run(dir, "pm build t.ply -o -");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(r.out == test::read_bytes(dir / "t.pm"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "-"));
+  ASSERT_EQ(run(dir, "pm extract t.pm -o from_file.ply --faces 100").status, 0);
+  r = run(dir, "pm extract - -o from_stdin.ply --faces 100", (dir / "t.pm").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(test::read_bytes(dir / "from_stdin.ply") == test::read_bytes(dir / "from_file.ply"));
+  EXPECT_EQ(run(dir, "pm info - --json", (dir / "t.pm").string()).status, 0);
+  EXPECT_EQ(run(dir, "pm geomorph - --from 50 --to 100 --alpha 0.5 -o m.ply", (dir / "t.pm").string()).status, 0);
+
+  // simplify's --format names the streams' format, not a file's: PLY in, OFF out.
+  ASSERT_EQ(run(dir, "simplify t.ply -o s.off --ratio 0.5").status, 0);
+  r = run(dir, "simplify t.ply -o - --format off --ratio 0.5");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(r.out == test::read_bytes(dir / "s.off"));
+  r = run(dir, "simplify t.ply -o s.obj --format off --ratio 0.5");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("neither is used"), std::string::npos) << r.err;
+
+  // One stdout: --json beside a mesh or stream written there is refused, as are frames named "-".
+  for (const char* both : {"simplify t.ply -o - --format off --ratio 0.5 --json", "pm build t.ply -o - --json",
+                           "pm extract t.pm -o - --format off --faces 50 --json",
+                           "csg union t.ply t.ply -o - --format off --json"}) {
+    r = run(dir, both);
+    EXPECT_EQ(r.status, 1) << both;
+    EXPECT_NE(r.err.find("--json prints there"), std::string::npos) << both << ": " << r.err;
+    EXPECT_TRUE(r.out.empty()) << both;
+  }
+  r = run(dir, "pm geomorph t.pm --from 50 --to 100 --frames 3 -o -");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("file name"), std::string::npos) << r.err;
+  // convert's streams take --from and --to, and its messages say so.
+  EXPECT_NE(run(dir, "convert t.ply -").err.find("--to"), std::string::npos);
+  EXPECT_NE(run(dir, "convert - x.ply", (dir / "t.ply").string()).err.find("--from"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "-"));
+}
+
 TEST(Cli, BadInputCorpusExitsOneNamingTheFileAndWritesNothing) {
   test::ScratchDir dir("cli-bad");
   const auto corpus = test::write_bad_corpus(dir.path());

@@ -25,6 +25,9 @@ int run_convert(const ConvertOptions& o, const GlobalOptions& global) {
   if (output.empty()) throw Error("convert: no output given (lodkit convert IN OUT)");
   if (!o.output.empty() && !o.output_flag.empty())
     throw Error("convert: give the output once, either as OUT or with -o");
+  // (Stdin and stdout take --from and --to here, not --format.)
+  if (o.input == "-" && !o.from) throw Error("<stdin>: give the input's format with --from (obj, ply, off, stl, drc)");
+  if (output == "-" && !o.to) throw Error("<stdout>: give the output's format with --to (obj, ply, off, stl, drc)");
   const auto start = std::chrono::steady_clock::now();
   Mesh mesh = read_input(o.input, o.from);
   const Index vertices_in = mesh.num_vertices();

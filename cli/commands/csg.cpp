@@ -56,7 +56,8 @@ Command add_csg_command(CLI::App& app, const GlobalOptions& global) {
     CLI::App* o = sub->add_subcommand(name, fmt::format("The {} of two closed meshes", name));
     o->add_option("a", opt->a, "First closed mesh")->required();
     o->add_option("b", opt->b, "Second closed mesh")->required();
-    o->add_option("-o,--output", opt->output, "Output mesh")->required();
+    o->add_option("-o,--output", opt->output, "Output mesh, or - for stdout (with --format)")->required();
+    o->add_option("--format", opt->format, "Format of stdout")->check(format_validator());
     o->add_flag("--exact", opt->exact, "Exact constructions from the start (slower; used anyway when needed)");
     o->add_flag("--json", opt->json, "Print the result as JSON");
     o->footer(fmt::format("Example:\n  lodkit csg {} a.ply b.ply -o out.ply", name));
@@ -64,7 +65,8 @@ Command add_csg_command(CLI::App& app, const GlobalOptions& global) {
   }
   CLI::App* tree = sub->add_subcommand("tree", "Evaluate a CSG tree (JSON) of primitives, meshes and transforms");
   tree->add_option("model", opt->tree, "The tree, e.g. data/csg/housing.json")->required()->check(CLI::ExistingFile);
-  tree->add_option("-o,--output", opt->output, "Output mesh")->required();
+  tree->add_option("-o,--output", opt->output, "Output mesh, or - for stdout (with --format)")->required();
+  tree->add_option("--format", opt->format, "Format of stdout")->check(format_validator());
   tree->add_option("--tolerance", opt->tolerance, "Chordal tolerance of curved primitives")->check(kPositive)
       ->capture_default_str();
   tree->add_flag("--exact", opt->exact, "Exact constructions from the start");
@@ -85,6 +87,7 @@ Example:
             for (const auto& [app_op, op] : ops) {
               if (!app_op->parsed()) continue;
               refuse_to_overwrite(opt->output, {opt->a, opt->b});  // before reading: fail fast
+              refuse_json_beside_stdout(opt->json, opt->output);
               const Mesh a = read_input(opt->a, std::nullopt), b = read_input(opt->b, std::nullopt);
               const BooleanResult r = boolean(a, b, op, {.exact = opt->exact}, opt->a, opt->b);
               write_output(r.mesh, opt->output, opt->format, WriteOptions{}, {opt->a, opt->b});
@@ -95,6 +98,7 @@ Example:
             const CsgNode root = read_csg(opt->tree);
             const std::vector<std::string> inputs = files_read(opt->tree, root);
             refuse_to_overwrite(opt->output, inputs);
+            refuse_json_beside_stdout(opt->json, opt->output);
             const CsgResult r = evaluate(root, {.tolerance = opt->tolerance, .exact = opt->exact, .split_at_parts = opt->split_at_parts});
             write_output(r.mesh, opt->output, opt->format, WriteOptions{}, inputs);
             report(global, opt->json, fmt::format("tree ({} primitives, {} operations)", r.primitives, r.operations), opt->output,

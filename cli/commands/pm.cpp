@@ -6,7 +6,10 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <cstdio>
 #include <fmt/format.h>
+#include <iostream>
+#include <iterator>
 #include <memory>
 
 #include "common.h"
@@ -36,7 +39,15 @@ struct PmCliOptions {
   std::optional<Index> rows;
 };
 
+// A stream from a file, or from stdin when `path` is "-".
+PmReadResult read_pm_input(const std::string& path, const PmReadOptions& options = {}) {
+  if (path != "-") return read_pm(path, options);
+  const std::string bytes{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
+  return read_pm_from_memory(bytes, "<stdin>", options);
+}
+
 int run_build(const PmCliOptions& o, const GlobalOptions& global) {
+  refuse_json_beside_stdout(o.json, o.output);
   Mesh mesh = read_input(o.input, o.format);
   // Flat shading splits every vertex by its normals: every edge is then a seam and nothing collapses.
   const bool had_normals = mesh.has_normals();
@@ -66,7 +77,14 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   if (o.keep_order) w.keep_order = true;
   w.splits_per_block = o.block;
   const auto t1 = std::chrono::steady_clock::now();
-  const PmStreamStats stats = write_pm(pm, o.output, w);
+  PmStreamStats stats;
+  if (o.output == "-") {  // (to another process: progressive transmission)
+    const std::string bytes = write_pm_to_memory(pm, w, &stats);
+    std::fwrite(bytes.data(), 1, bytes.size(), stdout);
+    std::fflush(stdout);
+  } else {
+    stats = write_pm(pm, o.output, w);
+  }
   const double write_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   const double bits_per_vertex = 8.0 * double(stats.total_bytes) / std::max<Index>(1, mesh.num_vertices());
   if (o.json) {
@@ -91,7 +109,7 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
                          "shading) every edge is a seam, and --drop-normals builds without them\n",
                  thousands(pm.num_faces(0)), thousands(mesh.num_faces()));
     fmt::print(stderr, "  {}: {} bytes ({:.1f} bits per input vertex; base {}, splits {}, order {}) written in {:.3f} s\n",
-               o.output, thousands(static_cast<long long>(stats.total_bytes)), bits_per_vertex,
+               o.output == "-" ? "<stdout>" : o.output, thousands(static_cast<long long>(stats.total_bytes)), bits_per_vertex,
                thousands(static_cast<long long>(stats.base_bytes)), thousands(static_cast<long long>(stats.split_bytes)),
                thousands(static_cast<long long>(stats.order_bytes + stats.extra_bytes)), write_seconds);
   }
@@ -103,7 +121,7 @@ void warn(const PmReadResult& r, const GlobalOptions& global) {
 }
 
 int run_info(const PmCliOptions& o, const GlobalOptions& global) {
-  const PmReadResult r = read_pm(o.input);
+  const PmReadResult r = read_pm_input(o.input);
   warn(r, global);
   const ProgressiveMesh& pm = r.pm;
   const double diagonal = pm.bounds.isEmpty() ? 0.0 : pm.bounds.diagonal().norm();
@@ -146,7 +164,7 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
                            .dump(2));
     return 0;
   }
-  fmt::print("{}: progressive mesh, {} ({}), {} bytes = {:.1f} bits per vertex\n", o.input,
+  fmt::print("{}: progressive mesh, {} ({}), {} bytes = {:.1f} bits per vertex\n", o.input == "-" ? "<stdin>" : o.input,
              r.position_bits ? fmt::format("{}-bit positions", r.position_bits) : std::string("lossless"),
              pm.knows_input_order() ? "input order kept" : "stream order", thousands(static_cast<long long>(r.bytes_read)),
              8.0 * double(r.bytes_read) / std::max<Index>(1, pm.num_wedges(pm.max_level())));
@@ -206,6 +224,7 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
 int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   const std::vector<std::string> inputs{o.input, o.prove_with.value_or("")};
   refuse_to_overwrite(o.output, inputs);  // before reading: fail fast
+  refuse_json_beside_stdout(o.json, o.output);
   const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
   if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
   if (o.prove_with && !o.max_error && !o.pixel_error)
@@ -221,7 +240,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
     ro.select_by = selection_kind(o);
   }
   const auto start = std::chrono::steady_clock::now();
-  const PmReadResult r = read_pm(o.input, ro);
+  const PmReadResult r = read_pm_input(o.input, ro);
   warn(r, global);
   std::string why;
   Index level = 0;
@@ -283,7 +302,8 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
 
 int run_geomorph(const PmCliOptions& o, const GlobalOptions& global) {
   refuse_to_overwrite(o.output, {o.input});  // before reading: fail fast
-  const PmReadResult r = read_pm(o.input);
+  if (o.frames > 0 && o.output == "-") throw Error("pm geomorph: --frames writes files OUT_000 ...: give OUT a file name");
+  const PmReadResult r = read_pm_input(o.input);
   warn(r, global);
   const ProgressiveMesh& pm = r.pm;
   if (!o.from || !o.to) throw Error("pm geomorph: --from and --to face counts are required");
@@ -328,7 +348,7 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
 
   CLI::App* build = pm->add_subcommand("build", "Build a progressive mesh from a mesh and write it as a .pm stream");
   build->add_option("input", opt->input, "Input mesh, or - for stdin (with --format)")->required();
-  build->add_option("-o,--output", opt->output, "Output .pm file")->required();
+  build->add_option("-o,--output", opt->output, "Output .pm file, or - for stdout")->required();
   build->add_option("--format", opt->format, "Format of stdin")->check(format_validator());
   build->add_option("--method", opt->method, "Collapse cost: quadric, hoppe or edge-length")
       ->check(CLI::IsMember({"quadric", "hoppe", "edge-length"}))->capture_default_str();
@@ -356,16 +376,17 @@ Examples:
   lodkit pm build scan.obj -o scan.pm --quantize 14 --draco --base-faces 500
   lodkit pm build spot.obj -o spot.pm --attribute-weights 0,1,0
   lodkit pm build bunny.ply -o bunny.pm --measure   # pm extract --pixel-error then picks what a viewer needs
+  lodkit pm build bunny.ply -o - | lodkit pm extract - -o bunny_1k.ply --faces 1000   # through a pipe
   lodkit pm build suzanne_flat.ply -o suzanne.pm --drop-normals   # flat shading: every edge a seam otherwise)");
 
   CLI::App* info = pm->add_subcommand("info", "Levels, sizes and error bounds of a .pm file");
-  info->add_option("input", opt->input, "A .pm file")->required();
+  info->add_option("input", opt->input, "A .pm file, or - for stdin")->required();
   info->add_option("--rows", opt->rows, "Levels in the table")->check(in_range(2, 10000));
   info->add_flag("--json", opt->json, "Print as JSON");
   info->footer("Example:\n  lodkit pm info bunny.pm --json");
 
   CLI::App* extract = pm->add_subcommand("extract", "Write one level of a .pm file as a mesh");
-  extract->add_option("input", opt->input, "A .pm file")->required();
+  extract->add_option("input", opt->input, "A .pm file, or - for stdin")->required();
   extract->add_option("-o,--output", opt->output, "Output mesh, or - for stdout (with --format)")->required();
   extract->add_option("--format", opt->format, "Format of stdout")->check(format_validator());
   extract->add_option("--faces", opt->faces, "The finest level with at most this many faces")->check(kNonNegative);
@@ -401,7 +422,7 @@ Examples:
   lodkit pm extract bunny.pm -o seen.ply --pixel-error 1 --distance 2 --prove-with bunny.ply)");
 
   CLI::App* morph = pm->add_subcommand("geomorph", "Blend between two levels (Hoppe's geomorphs)");
-  morph->add_option("input", opt->input, "A .pm file")->required();
+  morph->add_option("input", opt->input, "A .pm file, or - for stdin")->required();
   morph->add_option("--from", opt->from, "Coarse level: at most this many faces")->required()->check(kNonNegative);
   morph->add_option("--to", opt->to, "Fine level: at most this many faces")->required()->check(kNonNegative);
   morph->add_option("--alpha", opt->alpha, "Blend weight: 0 looks like --from, 1 is --to");

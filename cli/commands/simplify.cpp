@@ -212,8 +212,14 @@ int run_schroeder(const SimplifyCliOptions& o, const GlobalOptions& global, cons
   return 0;
 }
 
-int run_simplify(const SimplifyCliOptions& o, const GlobalOptions& global) {
-  const Mesh mesh = read_input(o.input, o.format);
+int run_simplify(SimplifyCliOptions o, const GlobalOptions& global) {
+  // --format names the format of stdin and stdout ("-"); files go by their extension, so that
+  // `simplify in.ply -o - --format off` reads PLY and writes OFF.
+  if (o.format && o.input != "-" && o.output != "-")
+    throw Error(fmt::format("simplify: --format {} names the format of stdin or stdout (-), and neither is used", *o.format));
+  refuse_json_beside_stdout(o.json, o.output);
+  const Mesh mesh = read_input(o.input, o.input == "-" ? o.format : std::nullopt);
+  if (o.output != "-") o.format.reset();
   if (o.method == "schroeder") {
     const auto b = bounding_box(mesh);
     return run_schroeder(o, global, mesh, b.isEmpty() ? 0.0 : b.diagonal().norm());
