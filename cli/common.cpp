@@ -16,23 +16,25 @@ namespace fs = std::filesystem;
 
 namespace {
 
-MeshFormat stream_format(const std::optional<std::string>& format, const char* stream) {
+MeshFormat stream_format(const std::optional<std::string>& format, const char* stream, const char* format_option) {
+  if (!format && !format_option) throw Error(fmt::format("{}: this command reads files only, not stdin", stream));
   if (!format)
-    throw Error(fmt::format("{}: give the format with --format (obj, ply, off, stl, drc)", stream));
+    throw Error(fmt::format("{}: give the format with {} (obj, ply, off, stl, drc)", stream, format_option));
   if (auto f = parse_format(*format)) return *f;
   throw Error(fmt::format("{}: unknown format '{}'", stream, *format));
 }
 
 }  // namespace
 
-Mesh read_input(const std::string& path, const std::optional<std::string>& format,
-                const ReadOptions& options) {
+Mesh read_input(const std::string& path, const std::optional<std::string>& format, const ReadOptions& options,
+                const char* format_option) {
   if (path == "-") {
+    const MeshFormat f = stream_format(format, "<stdin>", format_option);  // (before waiting for stdin)
     const std::string bytes{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
-    return read_mesh_from_memory(bytes, stream_format(format, "<stdin>"), "<stdin>", options);
+    return read_mesh_from_memory(bytes, f, "<stdin>", options);
   }
   ReadOptions with_format = options;
-  if (format) with_format.format = stream_format(format, path.c_str());
+  if (format) with_format.format = stream_format(format, path.c_str(), format_option);
   return read_mesh(path, with_format);
 }
 
@@ -51,16 +53,16 @@ void refuse_json_beside_stdout(bool json, const std::string& output) {
 }
 
 void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,
-                  const WriteOptions& options, const std::vector<std::string>& inputs) {
+                  const WriteOptions& options, const std::vector<std::string>& inputs, const char* format_option) {
   if (path == "-") {
-    const std::string bytes = write_mesh_to_memory(mesh, stream_format(format, "<stdout>"), options);
+    const std::string bytes = write_mesh_to_memory(mesh, stream_format(format, "<stdout>", format_option), options);
     std::fwrite(bytes.data(), 1, bytes.size(), stdout);
     std::fflush(stdout);
     return;
   }
   refuse_to_overwrite(path, inputs);
   WriteOptions with_format = options;
-  if (format) with_format.format = stream_format(format, path.c_str());
+  if (format) with_format.format = stream_format(format, path.c_str(), format_option);
   write_mesh(mesh, path, with_format);
 }
 

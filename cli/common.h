@@ -34,9 +34,10 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global);
 Command add_terrain_command(CLI::App& app, const GlobalOptions& global);
 Command add_subdivide_command(CLI::App& app, const GlobalOptions& global);
 
-/// Reads `path`, or stdin when it is "-" (then `format` names the format).
-Mesh read_input(const std::string& path, const std::optional<std::string>& format,
-                const ReadOptions& options = {});
+/// Reads `path`, or stdin when it is "-" (then `format` names the format; when missing, the error
+/// names `format_option`, the command's option for it, or says the command reads files only if null).
+Mesh read_input(const std::string& path, const std::optional<std::string>& format, const ReadOptions& options = {},
+                const char* format_option = "--format");
 
 /// Throws if `path` names the same file as one of `inputs` (under any name); "-" and "" are never files.
 void refuse_to_overwrite(const std::string& path, const std::vector<std::string>& inputs);
@@ -47,7 +48,8 @@ void refuse_json_beside_stdout(bool json, const std::string& output);
 /// Writes to `path` atomically, or to stdout when it is "-" (then `format` names the format).
 /// Refuses to write over any of `inputs` (the same file under any name).
 void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,
-                  const WriteOptions& options, const std::vector<std::string>& inputs = {});
+                  const WriteOptions& options, const std::vector<std::string>& inputs = {},
+                  const char* format_option = "--format");
 
 /// "12,345"
 std::string thousands(long long n);

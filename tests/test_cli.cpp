@@ -235,6 +235,9 @@ TEST(Cli, StreamsGoThroughStdinAndStdout) {
   // convert's streams take --from and --to, and its messages say so.
   EXPECT_NE(run(dir, "convert t.ply -").err.find("--to"), std::string::npos);
   EXPECT_NE(run(dir, "convert - x.ply", (dir / "t.ply").string()).err.find("--from"), std::string::npos);
+  // Each stream's message names the command's own option, or says it takes none.
+  EXPECT_NE(run(dir, "subdivide - -o x.ply", (dir / "t.ply").string()).err.find("--input-format"), std::string::npos);
+  EXPECT_NE(run(dir, "compare - t.ply", (dir / "t.ply").string()).err.find("files only"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir / "-"));
 }
 

@@ -79,7 +79,7 @@ Command add_compare_command(CLI::App& app, const GlobalOptions&) {
   lodkit compare original.obj simplified.obj --json --samples 2000000
   lodkit compare original.obj simplified.obj --within 0.1%   # exit 0: proved within, 3: not)");
   return {sub, [opt] {
-            const Mesh a = read_input(opt->a, std::nullopt), b = read_input(opt->b, std::nullopt);
+            const Mesh a = read_input(opt->a, std::nullopt, {}, nullptr), b = read_input(opt->b, std::nullopt, {}, nullptr);
             // Named by file: the library can only say "the first mesh" or "the second".
             for (const auto& [mesh, path] : {std::pair{&a, opt->a}, std::pair{&b, opt->b}})
               if (mesh->num_faces() == 0) throw Error(fmt::format("{}: has no faces, so no surface to compare", path));

@@ -25,11 +25,9 @@ int run_convert(const ConvertOptions& o, const GlobalOptions& global) {
   if (output.empty()) throw Error("convert: no output given (lodkit convert IN OUT)");
   if (!o.output.empty() && !o.output_flag.empty())
     throw Error("convert: give the output once, either as OUT or with -o");
-  // (Stdin and stdout take --from and --to here, not --format.)
-  if (o.input == "-" && !o.from) throw Error("<stdin>: give the input's format with --from (obj, ply, off, stl, drc)");
-  if (output == "-" && !o.to) throw Error("<stdout>: give the output's format with --to (obj, ply, off, stl, drc)");
+  if (output == "-" && !o.to) throw Error("<stdout>: give the format with --to (obj, ply, off, stl, drc)");  // fail fast
   const auto start = std::chrono::steady_clock::now();
-  Mesh mesh = read_input(o.input, o.from);
+  Mesh mesh = read_input(o.input, o.from, {}, "--from");
   const Index vertices_in = mesh.num_vertices();
   if (o.weld) weld_identical_vertices(mesh);
   if (o.drop_unreferenced) remove_unreferenced_vertices(mesh);
@@ -48,7 +46,7 @@ int run_convert(const ConvertOptions& o, const GlobalOptions& global) {
   w.colours = !o.no_colours;
   if (o.quantize) w.draco.position_bits = *o.quantize;
   w.draco.compression_level = o.compression_level;
-  write_output(mesh, output, o.to, w, {o.input});
+  write_output(mesh, output, o.to, w, {o.input}, "--to");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!global.quiet)
     fmt::print(stderr, "convert: {} -> {}: {} vertices ({} in), {} faces, {:.3f} s\n", o.input, output,

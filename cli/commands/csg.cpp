@@ -88,7 +88,7 @@ Example:
               if (!app_op->parsed()) continue;
               refuse_to_overwrite(opt->output, {opt->a, opt->b});  // before reading: fail fast
               refuse_json_beside_stdout(opt->json, opt->output);
-              const Mesh a = read_input(opt->a, std::nullopt), b = read_input(opt->b, std::nullopt);
+              const Mesh a = read_input(opt->a, std::nullopt, {}, nullptr), b = read_input(opt->b, std::nullopt, {}, nullptr);
               const BooleanResult r = boolean(a, b, op, {.exact = opt->exact}, opt->a, opt->b);
               write_output(r.mesh, opt->output, opt->format, WriteOptions{}, {opt->a, opt->b});
               report(global, opt->json, to_string(op), opt->output, r.mesh, r.volume, r.seconds, r.warnings, r.used_exact);

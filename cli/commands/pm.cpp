@@ -247,7 +247,7 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   std::optional<SimplifyResult::HausdorffLimit> proof;
   if (o.prove_with) {
     // The budget as a distance, then the coarsest level found proved within it against the input.
-    const Mesh input = read_input(*o.prove_with, std::nullopt);
+    const Mesh input = read_input(*o.prove_with, std::nullopt, {}, nullptr);
     if (input.num_faces() != r.pm.source_faces())
       throw Error(fmt::format("{}: has {} faces, but the finest level of {} has {}: --prove-with needs the mesh the "
                               "stream was built from", *o.prove_with, input.num_faces(), o.input, r.pm.source_faces()));

@@ -78,7 +78,7 @@ Catmull-Clark output quads are split along their shorter diagonal (lodkit meshes
             std::vector<int> polygon_sizes;
             ReadOptions read;
             read.polygon_sizes = &polygon_sizes;
-            const Mesh mesh = read_input(o.input, o.input_format, read);
+            const Mesh mesh = read_input(o.input, o.input_format, read, "--input-format");
             const SubdivideResult result = subdivide(mesh, s, polygon_sizes);
             write_output(result.mesh, o.output, o.format, WriteOptions{}, {o.input});
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -22,7 +22,7 @@ struct TerrainCommandOptions {
 Mesh load_base(const TerrainCommandOptions& o) {
   if (o.base == "grid") return make_terrain_base(TerrainBase::Grid);
   if (o.base == "pyramid") return make_terrain_base(TerrainBase::Pyramid);
-  const Mesh base = read_input(o.base, o.base_format);
+  const Mesh base = read_input(o.base, o.base_format, {}, "--base-format");
   // A file that reads as a mesh may still be no terrain base (a face whose corners weld into one
   // point): check it here, where the error can name the file.
   try {
