@@ -144,6 +144,19 @@ TEST(Primitives, BadParametersAreClearErrors) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cone: height"), std::string::npos) << e.what();
   }
+  // A tolerance too fine names the shape and the tolerance asked for (the torus gave each direction
+  // half of it, and its message named the half: "tolerance: 5e-13 is too fine").
+  for (auto [make, expected] : std::initializer_list<std::pair<std::function<Mesh()>, const char*>>{
+           {[] { return make_torus({.tolerance = 1e-12}); }, "torus: tolerance 1e-12 is too fine"},
+           {[] { return make_cylinder({.tolerance = 1e-12}); }, "cylinder: tolerance 1e-12 is too fine"},
+           {[] { return make_cone({.tolerance = 1e-12}); }, "cone: tolerance 1e-12 is too fine"}}) {
+    try {
+      make();
+      ADD_FAILURE() << expected;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  }
 }
 
 // Each count is within its range, but their product is not: a box of 65536 divisions (51.5 billion

@@ -81,8 +81,8 @@ Mesh make_grid(const GridOptions& options = {});
 Mesh make_square_pyramid(const PyramidOptions& options = {});
 
 /// Fewest segments of a circle of `radius` whose sagitta r (1 - cos(pi / n)) is at most `tolerance`
-/// (at least 3). \throw Error if tolerance is not positive.
-int circle_segments_for_tolerance(double radius, double tolerance);
+/// (at least 3). \throw Error "<shape>: ..." if tolerance is not positive or needs more than 65,536.
+int circle_segments_for_tolerance(double radius, double tolerance, const char* shape = "circle");
 
 /// Upper bounds of the distance from the true surface to the tessellation, for reporting.
 double uv_sphere_chordal_error(double radius, int segments, int rings);

@@ -81,14 +81,15 @@ double circle_chordal_error(double radius, int segments) {
   return radius * (1.0 - std::cos(kPi / segments));
 }
 
-int circle_segments_for_tolerance(double radius, double tolerance) {
-  require_positive(tolerance, "tolerance", "chordal tolerance");
+int circle_segments_for_tolerance(double radius, double tolerance, const char* shape) {
+  require_positive(tolerance, shape, "tolerance");
   if (tolerance >= radius) return 3;
   int n = static_cast<int>(std::ceil(kPi / std::acos(1.0 - tolerance / radius)));
   n = std::max(n, 3);
   while (n > 3 && circle_chordal_error(radius, n - 1) <= tolerance) --n;  // guard rounding
   while (circle_chordal_error(radius, n) > tolerance) ++n;
-  require(n <= 1 << 16, "tolerance", fmt::format("{} is too fine for radius {}", tolerance, radius));
+  require(n <= 1 << 16, shape,
+          fmt::format("tolerance {} is too fine: a circle of radius {} would need more than 65,536 segments", tolerance, radius));
   return n;
 }
 
@@ -283,7 +284,7 @@ Mesh make_icosphere(const IcosphereOptions& o) {
 Mesh make_cylinder(const CylinderOptions& o) {
   require_positive(o.radius, "cylinder", "radius");
   require_positive(o.height, "cylinder", "height");
-  const int n = o.tolerance ? circle_segments_for_tolerance(o.radius, *o.tolerance) : o.segments;
+  const int n = o.tolerance ? circle_segments_for_tolerance(o.radius, *o.tolerance, "cylinder") : o.segments;
   require_count(n, 3, "cylinder", "segments");
   require_count(o.stacks, 1, "cylinder", "stacks");
   require_faces(std::int64_t{n} * (2 * std::int64_t{o.stacks} + 2), "cylinder",
@@ -310,7 +311,7 @@ Mesh make_cylinder(const CylinderOptions& o) {
 Mesh make_cone(const ConeOptions& o) {
   require_positive(o.radius, "cone", "radius");
   require_positive(o.height, "cone", "height");
-  const int n = o.tolerance ? circle_segments_for_tolerance(o.radius, *o.tolerance) : o.segments;
+  const int n = o.tolerance ? circle_segments_for_tolerance(o.radius, *o.tolerance, "cone") : o.segments;
   require_count(n, 3, "cone", "segments");
   MeshBuilder b;
   for (int j = 0; j < n; ++j) {
@@ -333,9 +334,14 @@ Mesh make_torus(const TorusOptions& o) {
   if (o.tolerance) {
     const double t = *o.tolerance;
     require_positive(t, "torus", "tolerance");
-    // Split the budget evenly, then coarsen each direction while the bound still holds.
-    nu = circle_segments_for_tolerance(o.major_radius + o.minor_radius, t / 2);
-    nv = circle_segments_for_tolerance(o.minor_radius, t / 2);
+    // Split the budget evenly, then coarsen each direction while the bound still holds. (The
+    // message names the tolerance asked for, not its half.)
+    const double outer = o.major_radius + o.minor_radius;
+    require(circle_chordal_error(outer, 1 << 16) <= t / 2 && circle_chordal_error(o.minor_radius, 1 << 16) <= t / 2,
+            "torus", fmt::format("tolerance {} is too fine: a circle of radius {} would need more than 65,536 segments "
+                                 "for half of it", t, circle_chordal_error(outer, 1 << 16) > t / 2 ? outer : o.minor_radius));
+    nu = circle_segments_for_tolerance(outer, t / 2, "torus");
+    nv = circle_segments_for_tolerance(o.minor_radius, t / 2, "torus");
     while (nu > 3 && torus_chordal_error(o.major_radius, o.minor_radius, nu - 1, nv) <= t) --nu;
     while (nv > 3 && torus_chordal_error(o.major_radius, o.minor_radius, nu, nv - 1) <= t) --nv;
   }
