@@ -1,9 +1,11 @@
 // lodkit: one binary, one subcommand per job. main() only parses, dispatches and turns errors into
 // exit codes: 0 success, 1 a lodkit::Error (bad input, failed write), 2 a usage error.
 #include <lodkit/error.h>
+#include <lodkit/io.h>
 #include <lodkit/version.h>
 
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <fmt/format.h>
@@ -11,8 +13,33 @@
 
 #include "common.h"
 
+namespace {
+
+// Interrupted (Ctrl-C, kill, a closed terminal): the files being written are removed, then the signal
+// takes its default course, so the exit status still says what stopped the run. Without this a hidden
+// temporary file, hundreds of MB for a large terrain, was left beside each output.
+extern "C" void remove_unfinished_outputs_and_stop(int signal) {
+  lodkit::remove_unfinished_outputs();
+  std::raise(signal);  // (SA_RESETHAND restored the default action)
+}
+
+void clean_up_when_interrupted() {
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction previous{};
+    if (sigaction(signal, nullptr, &previous) == 0 && previous.sa_handler == SIG_IGN) continue;  // (nohup)
+    struct sigaction action{};
+    action.sa_handler = remove_unfinished_outputs_and_stop;
+    action.sa_flags = SA_RESETHAND;
+    sigemptyset(&action.sa_mask);
+    sigaction(signal, &action, nullptr);
+  }
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace lodkit::cli;
+  clean_up_when_interrupted();
   CLI::App app{"lodkit " LODKIT_VERSION_STRING
                ": mesh processing and level of detail",
                "lodkit"};

@@ -5,12 +5,16 @@
 #include <lodkit/metrics.h>
 #include <lodkit/primitives.h>
 
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <fmt/format.h>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
 
 #include "bad_corpus.h"
 #include "test_util.h"
@@ -239,6 +243,39 @@ TEST(Cli, StreamsGoThroughStdinAndStdout) {
   EXPECT_NE(run(dir, "subdivide - -o x.ply", (dir / "t.ply").string()).err.find("--input-format"), std::string::npos);
   EXPECT_NE(run(dir, "compare - t.ply", (dir / "t.ply").string()).err.find("files only"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir / "-"));
+}
+
+// Interrupted mid-write (SIGTERM here, SIGINT from Ctrl-C alike), lodkit removes its temporary file
+// and dies of the signal: a killed 67-million-face terrain left a hidden 247 MB file beside its target.
+TEST(Cli, AnInterruptedWriteLeavesNothingBehind) {
+  test::ScratchDir dir("cli-signal");
+  const std::string path = dir.path().string();
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {  // (only exec-safe calls here)
+    if (chdir(path.c_str()) != 0) _exit(127);
+    execl(LODKIT_CLI, LODKIT_CLI, "-q", "terrain", "-o", "big.ply", "--levels", "10", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  const auto writing = [&] {
+    for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+      if (e.path().filename().string().starts_with(".big.ply.tmp-")) return true;
+    return false;
+  };
+  // Caught mid-write (the write takes about a quarter of a second): stopped while the temporary file
+  // exists and the target does not, then terminated.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!writing() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  kill(pid, SIGSTOP);
+  const bool caught = writing() && !std::filesystem::exists(dir / "big.ply");
+  kill(pid, SIGTERM);
+  kill(pid, SIGCONT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(caught) << "the write was not caught in progress";
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << status;
+  EXPECT_EQ(dir.entries(), 0u) << "a temporary file was left behind";
 }
 
 TEST(Cli, BadInputCorpusExitsOneNamingTheFileAndWritesNothing) {

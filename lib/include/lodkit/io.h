@@ -79,4 +79,10 @@ void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const Write
 /// The bytes `write_mesh` would write, for stdout or a network buffer.
 std::string write_mesh_to_memory(const Mesh& mesh, MeshFormat format, const WriteOptions& options = {});
 
+/// Removes the temporary files of the writes in progress (every file lodkit writes, meshes, `.pm`
+/// streams and terrains, goes to a hidden temporary file beside its target and is renamed into place
+/// when complete). Async-signal-safe: for a program's SIGINT or SIGTERM handler, so that an
+/// interrupted run leaves nothing behind; the library installs no handler itself (the CLI does).
+void remove_unfinished_outputs() noexcept;
+
 }  // namespace lodkit

@@ -2,11 +2,55 @@
 
 #include <lodkit/error.h>
 
+#include <lodkit/io.h>
+
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <fmt/format.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+namespace lodkit {
+namespace {
+
+// The temporary files being written, for remove_unfinished_outputs(): a fixed table of pointers to
+// their names, because a signal handler may neither lock nor allocate. (A write that finds the table
+// full is not tracked; 32 writes at once is more than lodkit ever runs.)
+constexpr int kTrackedWrites = 32;
+std::atomic<const char*> g_unfinished[kTrackedWrites];
+static_assert(std::atomic<const char*>::is_always_lock_free);
+
+// Tracks `path` while it lives; the name must outlive it.
+class UnfinishedOutput {
+ public:
+  explicit UnfinishedOutput(const char* path) {
+    for (auto& slot : g_unfinished) {
+      const char* empty = nullptr;
+      if (slot.compare_exchange_strong(empty, path)) {
+        slot_ = &slot;
+        return;
+      }
+    }
+  }
+  ~UnfinishedOutput() {
+    if (slot_) slot_->store(nullptr);
+  }
+  UnfinishedOutput(const UnfinishedOutput&) = delete;
+  UnfinishedOutput& operator=(const UnfinishedOutput&) = delete;
+
+ private:
+  std::atomic<const char*>* slot_ = nullptr;
+};
+
+}  // namespace
+
+void remove_unfinished_outputs() noexcept {
+  for (auto& slot : g_unfinished)
+    if (const char* path = slot.load()) ::unlink(path);  // (after the rename, its old name is gone: no-op)
+}
+
+}  // namespace lodkit
 
 namespace lodkit::detail {
 
@@ -29,6 +73,7 @@ void write_file_atomically(const std::filesystem::path& path,
   std::string tmpl = (dir / hidden_name).string();
   const int fd = ::mkstemp(tmpl.data());
   if (fd < 0) throw Error(fmt::format("{}: cannot create a file there: {}", name, std::strerror(errno)));
+  const UnfinishedOutput tracked(tmpl.c_str());
   ::fchmod(fd, 0644);
   std::FILE* file = ::fdopen(fd, "wb");
   if (!file) {
