@@ -5,6 +5,10 @@
 #include <lodkit/io.h>
 #include <lodkit/primitives.h>
 
+#include <fmt/format.h>
+
+#include <sys/stat.h>
+
 #include "bad_corpus.h"
 #include "test_util.h"
 
@@ -107,6 +111,25 @@ TEST(AtomicWrite, FailedWriteLeavesNothingAndKeepsTheOldFile) {
   EXPECT_THROW(write_mesh(bad, dir / "bad.ply"), Error);
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.ply"));
   EXPECT_EQ(dir.entries(), 1u);
+}
+
+// Written files get the permissions the umask allows, as any program's output: they were always 0644
+// (a private umask of 077 made them world-readable; a group-writable 002 did not make them so).
+TEST(AtomicWrite, FilesGetTheUmasksPermissions) {
+  test::ScratchDir dir("atomic");
+  const mode_t saved = ::umask(077);
+  const auto mode_of = [](const std::filesystem::path& p) {
+    struct stat st{};
+    ::stat(p.c_str(), &st);
+    return st.st_mode & 0777;
+  };
+  for (const mode_t mask : {mode_t{077}, mode_t{022}, mode_t{002}}) {
+    ::umask(mask);
+    const auto target = dir / fmt::format("out{:o}.ply", mask);
+    write_mesh(test::single_triangle(), target);
+    EXPECT_EQ(mode_of(target), 0666u & ~mask) << std::oct << mask;
+  }
+  ::umask(saved);
 }
 
 TEST(AtomicWrite, UnwritableDirectoryIsAClearError) {

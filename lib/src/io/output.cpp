@@ -8,6 +8,8 @@
 #include <cerrno>
 #include <cstring>
 #include <fmt/format.h>
+#include <fcntl.h>
+#include <random>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -43,6 +45,21 @@ class UnfinishedOutput {
   std::atomic<const char*>* slot_ = nullptr;
 };
 
+// Creates `base` + a random suffix, new, for writing. (mkstemp would make it 0600, and a chmod after it
+// cannot know the umask without changing it, which races with other threads; opened here with 0666,
+// the file gets the umask's permissions, as every program's output does.)
+int create_temporary(const std::string& base, std::string& name) {
+  static constexpr char kLetters[] = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
+  thread_local std::mt19937_64 random{std::random_device{}()};
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    name = base;
+    for (int i = 0; i < 6; ++i) name += kLetters[random() % (sizeof kLetters - 1)];
+    const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd >= 0 || errno != EEXIST) return fd;
+  }
+  return -1;
+}
+
 }  // namespace
 
 void remove_unfinished_outputs() noexcept {
@@ -69,12 +86,11 @@ void write_file_atomically(const std::filesystem::path& path,
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
   std::string hidden_name(".");  // appended piecewise: GCC 12 warns falsely on "." + string
   hidden_name += path.filename().string();
-  hidden_name += ".tmp-XXXXXX";
-  std::string tmpl = (dir / hidden_name).string();
-  const int fd = ::mkstemp(tmpl.data());
+  hidden_name += ".tmp-";
+  std::string tmpl;
+  const int fd = create_temporary((dir / hidden_name).string(), tmpl);
   if (fd < 0) throw Error(fmt::format("{}: cannot create a file there: {}", name, std::strerror(errno)));
   const UnfinishedOutput tracked(tmpl.c_str());
-  ::fchmod(fd, 0644);
   std::FILE* file = ::fdopen(fd, "wb");
   if (!file) {
     ::close(fd);
