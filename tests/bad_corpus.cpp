@@ -23,6 +23,7 @@ std::vector<BadFile> write_bad_corpus(const std::filesystem::path& dir) {
     add(std::string("empty.") + ext, "", "file is empty");
   add("mesh.xyz", cube_obj, "unknown mesh format");
   add("no_extension", cube_obj, "unknown mesh format");
+  add("stream.pm", cube_obj, "a progressive-mesh stream, not a mesh");
 
   // OBJ.
   add("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "line 2");

@@ -1029,6 +1029,7 @@ TEST(CliPm, BadStreamsAndOptionsFailClearly) {
   r = run(dir, "pm info t.ply");
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.err.find("t.ply"), std::string::npos);
+  EXPECT_NE(r.err.find("pm build"), std::string::npos) << r.err;
   // Truncated: the valid prefix and a warning.
   const std::string bytes = test::read_bytes(dir / "t.pm");
   test::write_text(dir / "cut.pm", bytes.substr(0, bytes.size() / 2));

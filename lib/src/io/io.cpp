@@ -43,6 +43,9 @@ MeshFormat require_format(const std::filesystem::path& path, std::optional<MeshF
   if (given) return *given;
   if (auto f = format_of(path)) return *f;
   const std::string ext = path.extension().string();
+  if (ext == ".pm")
+    throw Error(fmt::format("{}: a progressive-mesh stream, not a mesh: extract a level from it (lodkit pm extract, "
+                            "read_pm() and extract_level())", path.string()));
   throw Error(fmt::format("{}: unknown mesh format '{}' (expected .obj, .ply, .off, .stl or .drc)",
                           path.string(), ext.empty() ? "(no extension)" : ext));
 }

@@ -86,7 +86,7 @@ std::string encode_header(const Header& h) {
 
 bool decode_header(const char* bytes, Header& h, std::string& why) {
   if (std::memcmp(bytes, kMagic, sizeof kMagic) != 0) {
-    why = "not a lodkit progressive mesh (bad magic number)";
+    why = "not a lodkit progressive mesh (bad magic number; a mesh becomes one through lodkit pm build)";
     return false;
   }
   ByteReader r(bytes + sizeof kMagic, kHeaderSize - sizeof kMagic);
