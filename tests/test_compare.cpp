@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <limits>
 #include <numbers>
 #include <lodkit/error.h>
 #include <lodkit/metrics.h>
@@ -442,6 +443,16 @@ TEST(FlippedFaces, CountFacesAgainstTheNearestInputFacesAndNoneAgainstThemselves
 }
 
 TEST(Compare, RefusesEmptyMeshes) { EXPECT_THROW(compare(Mesh{}, make_box({})), Error); }
+
+TEST(Compare, RefusesATolerancePastItsRange) {
+  const Mesh box = make_box({});
+  for (const double bad : {-1e-3, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    EXPECT_THROW(compare(box, box, {.hausdorff_tolerance = bad}), Error) << bad;
+    EXPECT_THROW(CompareReference(box, 100, {.hausdorff_tolerance = bad}), Error) << bad;
+  }
+  EXPECT_THROW(compare(box, box, {.max_splits = -1}), Error);
+  EXPECT_NO_THROW(compare(box, box, {.hausdorff_tolerance = 0}));
+}
 
 // 2·10⁹ samples (about 200 GB) ran out of memory with a message naming nothing; now a refusal up front.
 TEST(Compare, RefusesMoreSamplesThanMemoryHolds) {

@@ -4,9 +4,11 @@
 #include <lodkit/inspect.h>
 #include <lodkit/metrics.h>
 #include <lodkit/primitives.h>
+#include <lodkit/progressive.h>
 #include <lodkit/simplify.h>
 
 #include <algorithm>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <tbb/global_control.h>
@@ -624,6 +626,22 @@ TEST(Simplify, BadOptionsAreErrors) {
   hoppe.hoppe_points_per_face = 1.0;
   hoppe.hoppe_min_points = -1;
   EXPECT_THROW(simplify(m, hoppe), Error);
+  // Weights and floors that were taken as they came (a NaN weight made every cost NaN), and every entry
+  // point that takes these options: simplify_within() set its base from a ratio of 1.5 unchecked.
+  for (const double bad : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    std::vector<SimplifyOptions> options(5);
+    options[0].attribute_weights.normals = bad;
+    options[1].attribute_weights.colours = bad;
+    options[2].crease_weight = bad;
+    options[3].boundary_weight = bad;
+    options[4].min_triangle_quality = bad;
+    for (std::size_t i = 0; i < options.size(); ++i) {
+      EXPECT_THROW(simplify(m, options[i]), Error) << i << " " << bad;
+      EXPECT_THROW(simplify_within(m, 0.1, options[i]), Error) << i << " " << bad;
+      EXPECT_THROW(build_progressive_mesh(m, {.simplify = options[i]}), Error) << i << " " << bad;
+    }
+  }
+  EXPECT_THROW(simplify_within(m, 0.1, {.target_ratio = 1.5}), Error);
 }
 
 // A long box of thin triangles is CAD in miniature. With one random point per face, the paper's spring

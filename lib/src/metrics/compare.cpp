@@ -288,6 +288,12 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
 // rather than running out of memory part way.
 constexpr long long kMostSamples = 150'000'000;
 
+void check_options(const CompareOptions& o) {
+  if (!(std::isfinite(o.hausdorff_tolerance) && o.hausdorff_tolerance >= 0))
+    throw Error(fmt::format("compare: the Hausdorff tolerance must be finite and not negative, got {}", o.hausdorff_tolerance));
+  if (o.max_splits < 0) throw Error(fmt::format("compare: the split limit must not be negative, got {}", o.max_splits));
+}
+
 void check_samples(long long samples) {
   if (samples <= 0) throw Error(fmt::format("compare: samples must be positive, got {}", samples));
   if (samples > kMostSamples)
@@ -336,6 +342,7 @@ std::vector<Index> charts_of(const Mesh& m) { return m.has_uvs() ? detail::uv_ch
 CompareReference::CompareReference(const Mesh& reference, long long face_samples, const CompareOptions& options) {
   validate(reference, "compare: the first mesh");
   if (reference.num_faces() == 0) throw Error("compare: the first mesh has no faces");
+  check_options(options);
   check_samples(face_samples);
   state_ = std::make_unique<State>(State{reference, face_samples, options, detail::AabbTree(reference),
                                          sample_surface(reference, face_samples), detail::face_neighbours(reference),
@@ -371,6 +378,7 @@ Comparison compare(const Mesh& a, const Mesh& b, const CompareOptions& options) 
   validate(b, "compare: the second mesh");
   if (a.num_faces() == 0) throw Error("compare: the first mesh has no faces");
   if (b.num_faces() == 0) throw Error("compare: the second mesh has no faces");
+  check_options(options);
   const long long samples = options.samples.value_or(default_face_samples(std::max(a.num_faces(), b.num_faces())));
   check_samples(samples);
   // One direction at a time, so that only one surface's samples are held at once.

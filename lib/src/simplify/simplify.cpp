@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <optional>
+#include <utility>
 
 #include "core/geometry.h"
 #include "simplify/attribute_fit.h"
@@ -15,9 +16,9 @@
 
 namespace lodkit {
 
-SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  validate(mesh, "simplify");
+namespace detail {
+
+void check_options(const SimplifyOptions& options) {
   if (options.target_ratio && !(*options.target_ratio >= 0 && *options.target_ratio <= 1))
     throw Error(fmt::format("simplify: ratio must be between 0 and 1, got {}", *options.target_ratio));
   if (options.target_faces && *options.target_faces < 0)
@@ -51,6 +52,25 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
                             options.hoppe_crease_angle_deg));
   if (options.hoppe_fit_passes < 0)
     throw Error(fmt::format("simplify: hoppe's fit passes must not be negative, got {}", options.hoppe_fit_passes));
+  const AttributeWeights& w = options.attribute_weights;
+  for (const auto& [name, weight] : {std::pair{"normals", w.normals}, {"UVs", w.uvs}, {"colours", w.colours}})
+    if (!(std::isfinite(weight) && weight >= 0))
+      throw Error(fmt::format("simplify: the {} weight must be finite and not negative, got {}", name, weight));
+  if (!(std::isfinite(options.crease_weight) && options.crease_weight >= 0))
+    throw Error(fmt::format("simplify: the crease weight must be finite and not negative, got {}", options.crease_weight));
+  if (!(std::isfinite(options.boundary_weight) && options.boundary_weight >= 0))
+    throw Error(fmt::format("simplify: the boundary weight must be finite and not negative, got {}", options.boundary_weight));
+  if (!(options.min_triangle_quality >= 0 && options.min_triangle_quality <= 1))
+    throw Error(fmt::format("simplify: the triangle quality floor must be between 0 and 1, got {}",
+                            options.min_triangle_quality));
+}
+
+}  // namespace detail
+
+SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(mesh, "simplify");
+  detail::check_options(options);
   // With no limit at all, half the faces.
   const Index target = !options.target_faces && !options.target_ratio && !options.max_error
                            ? mesh.num_faces() / 2

@@ -81,6 +81,7 @@ SimplifyResult simplify_within(const Mesh& mesh, double max_distance, const Simp
   if (!std::isfinite(max_distance) || max_distance < 0)
     throw Error(fmt::format("simplify: the Hausdorff limit must be finite and not negative, got {}", max_distance));
   validate(mesh, "simplify");
+  detail::check_options(options);  // (before the build: a ratio past 1 would set the base's faces)
   // What the levels are built from and measured against: a copy when the input changes first. The
   // progressive mesh records collapses by vertex, so it cannot drop the input's normals as simplify()
   // does: it is built from a copy without them, and the output gets fresh ones. Faces that disagree on

@@ -8,6 +8,9 @@
 
 namespace lodkit::detail {
 
+/// \throw Error for options out of their range (a ratio past 1, a weight that is negative or NaN, ...).
+void check_options(const SimplifyOptions& options);
+
 /// The largest of target_faces and target_ratio of the input's faces (rounded); 0 when neither is set.
 inline Index requested_faces(const Mesh& mesh, const SimplifyOptions& options) {
   Index target = 0;
