@@ -127,6 +127,9 @@ TEST(PmStream, DracoBaseDecodesToTheSameLevels) {
   EXPECT_LT((a.positions - b.positions).cwiseAbs().maxCoeff(), 1e-3);
   wo.position_bits = 0;
   EXPECT_THROW(write_pm_to_memory(pm, wo), Error);
+  wo.position_bits = 12;
+  wo.draco_compression_level = 11;  // (was taken)
+  EXPECT_THROW(write_pm_to_memory(pm, wo), Error);
 }
 
 TEST(PmStream, DracoBaseFallsBackWhereDracoCannotQuantise) {

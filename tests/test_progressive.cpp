@@ -352,6 +352,7 @@ TEST(Geomorph, EndpointsAreTheTwoLevels) {
   const Mesh half = g.at(0.5);
   EXPECT_LT((half.positions - 0.5 * (start.positions + end.positions)).cwiseAbs().maxCoeff(), 1e-15);
   EXPECT_THROW(make_geomorph(pm, to, from), Error);
+  for (const double outside : {-0.5, 2.0, std::nan("")}) EXPECT_THROW(g.at(outside), Error) << outside;  // (extrapolated)
 }
 
 TEST(LevelSelection, PixelBudgetPicksTheCoarsestLevelWithinBudget) {

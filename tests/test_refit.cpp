@@ -293,6 +293,11 @@ TEST(Refit, BadOptionsAreErrors) {
   EXPECT_THROW(refit_to_input(fine, coarse, {.rms_guard = 1.5}), Error);
   EXPECT_THROW(refit_to_input(fine, coarse, {.keep_face_below = -0.1}), Error);
   EXPECT_THROW(refit_to_input(fine, coarse, {.keep_face_below = 1.5}), Error);
+  for (const double bad : {0.0, 200.0, std::nan("")}) {  // (a NaN turn limit let every face turn)
+    EXPECT_THROW(refit_to_input(fine, coarse, {.max_step_turn_deg = bad}), Error) << bad;
+    EXPECT_THROW(refit_to_input(fine, coarse, {.max_total_turn_deg = bad}), Error) << bad;
+  }
+  EXPECT_THROW(refit_to_input(fine, coarse, {.min_triangle_quality = 2}), Error);
   o.refit_passes.reset();
   o.refit_rms_passes = -1;
   EXPECT_THROW(simplify(fine, o), Error);

@@ -215,6 +215,7 @@ struct Geomorph {
   Colours start_colours;
 
   /// The mesh at `alpha` in [0, 1]: exactly the coarse level's shape at 0 and the fine level at 1.
+  /// \throw Error for an alpha outside [0, 1] (it would extrapolate past both levels).
   Mesh at(double alpha) const;
   /// As at(), reusing `out`'s storage (connectivity is copied only when the face count differs).
   void evaluate(double alpha, Mesh& out) const;

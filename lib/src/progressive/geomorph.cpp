@@ -46,6 +46,7 @@ Geomorph make_geomorph(const ProgressiveMesh& pm, Index coarse_level, Index fine
 }
 
 void Geomorph::evaluate(double alpha, Mesh& out) const {
+  if (!(alpha >= 0 && alpha <= 1)) throw Error(fmt::format("geomorph: alpha must be in [0, 1], got {}", alpha));
   const Mesh& end = fine.mesh;
   if (out.num_faces() != end.num_faces() || out.num_vertices() != end.num_vertices()) out = end;
   // (1 - a) s + a e is exactly s at a = 0 and exactly e at a = 1.

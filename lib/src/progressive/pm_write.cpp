@@ -280,6 +280,8 @@ std::string write_pm_to_memory(const ProgressiveMesh& pm, const PmWriteOptions& 
     if (bits < 1 || bits > 30) throw Error(fmt::format("write_pm: attribute bits must be 1 to 30, got {}", bits));
   if (o.splits_per_block < 1) throw Error("write_pm: splits per block must be at least 1");
   if (o.draco_base && o.position_bits == 0) throw Error("write_pm: a Draco base needs quantised positions (--quantize BITS)");
+  if (o.draco_compression_level < 0 || o.draco_compression_level > 10)
+    throw Error(fmt::format("write_pm: the Draco compression level must be 0 to 10, got {}", o.draco_compression_level));
 
   Header h;
   const bool quantised = o.position_bits > 0;

@@ -571,6 +571,12 @@ bool needs_refit(const Mesh& input, const Mesh& simplified, const RefitOptions& 
     throw Error(fmt::format("refit: the RMS guard must be in [0, 1], got {}", options.rms_guard));
   if (!(options.keep_face_below >= 0 && options.keep_face_below <= 1))
     throw Error(fmt::format("refit: keep_face_below must be in [0, 1], got {}", options.keep_face_below));
+  if (!(options.max_step_turn_deg > 0 && options.max_step_turn_deg <= 180))
+    throw Error(fmt::format("refit: the turn per step must be in (0, 180] degrees, got {}", options.max_step_turn_deg));
+  if (!(options.max_total_turn_deg > 0 && options.max_total_turn_deg <= 180))
+    throw Error(fmt::format("refit: the total turn must be in (0, 180] degrees, got {}", options.max_total_turn_deg));
+  if (!(options.min_triangle_quality >= 0 && options.min_triangle_quality <= 1))
+    throw Error(fmt::format("refit: the triangle quality floor must be in [0, 1], got {}", options.min_triangle_quality));
   if (!(options.exponent >= 0 && options.exponent <= 64))
     throw Error(fmt::format("refit: exponent must be between 0 and 64, got {}", options.exponent));
   if (!face_origin.empty() && face_origin.size() != static_cast<std::size_t>(simplified.num_faces()))
