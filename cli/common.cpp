@@ -155,6 +155,7 @@ nlohmann::json to_json(const MeshReport& r) {
   j["duplicate_faces"] = r.duplicate_faces;
   j["manifold"] = r.manifold;
   j["oriented"] = r.oriented;
+  if (r.orientable) j["orientable"] = *r.orientable;
   j["closed"] = r.closed;
   j["euler_characteristic"] = r.euler_characteristic;
   j["genus"] = r.genus ? json(*r.genus) : json(nullptr);

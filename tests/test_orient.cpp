@@ -126,6 +126,24 @@ TEST(Orient, LeavesANonOrientableBandAlone) {
   EXPECT_EQ(m.triangles, band.triangles);
 }
 
+// inspect() tells a band that no turning can orient (info's hint said --orient would) from a mesh
+// whose faces only disagree, and from one that agrees already.
+TEST(Orient, InspectSaysWhetherAMeshCanBeOriented) {
+  const MeshReport band = inspect(moebius_band());
+  ASSERT_TRUE(band.orientable.has_value());
+  EXPECT_FALSE(*band.orientable);
+  EXPECT_GT(band.inconsistently_oriented_edges, 0);
+  Index turned = 0;
+  const Mesh sphere = make_icosphere({.subdivisions = 2});
+  const MeshReport mixed = inspect(shuffled(sphere, turned));
+  ASSERT_GT(turned, 0);
+  EXPECT_FALSE(mixed.oriented);
+  EXPECT_EQ(mixed.orientable, std::optional<bool>(true));
+  EXPECT_EQ(inspect(sphere).orientable, std::optional<bool>(true));
+  // A band beside an orientable sphere: not orientable as a whole.
+  EXPECT_EQ(inspect(concatenated(moebius_band(), sphere)).orientable, std::optional<bool>(false));
+}
+
 TEST(Orient, EmptyAndDegenerateFacesAreLeft) {
   Mesh empty;
   EXPECT_EQ(orient_consistently(empty), 0);

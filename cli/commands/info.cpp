@@ -39,17 +39,20 @@ void print_report(const std::string& input, const MeshReport& r) {
   line("attributes", attrs.empty() ? "none" : attrs);
   std::string topo = r.closed ? "closed" : "open";
   topo += r.manifold ? ", manifold" : ", NOT manifold";
-  if (r.manifold) topo += r.oriented ? ", oriented" : ", NOT consistently oriented";
+  if (r.manifold) topo += r.oriented ? ", oriented" : r.orientable == false ? ", NOT orientable" : ", NOT consistently oriented";
   topo += fmt::format(", {} component{}", r.components, r.components == 1 ? "" : "s");
   if (r.genus) topo += fmt::format(", genus {}", *r.genus);
   topo += fmt::format(", Euler characteristic {}", r.euler_characteristic);
   line("topology", topo);
-  line("boundary", fmt::format("{} edges in {} loops", thousands(r.boundary_edges), r.boundary_loops));
+  line("boundary", fmt::format("{} edges in {} loop{}", thousands(r.boundary_edges), r.boundary_loops,
+                               r.boundary_loops == 1 ? "" : "s"));
   line("defects", fmt::format("{} non-manifold edges, {} non-manifold vertices, {} inconsistently "
                               "oriented edges, {} degenerate faces, {} duplicate faces",
                               r.non_manifold_edges, r.non_manifold_vertices,
                               r.inconsistently_oriented_edges, r.degenerate_faces, r.duplicate_faces));
-  if (r.inconsistently_oriented_edges > 0)
+  if (r.orientable == false)
+    line("hint", "a one-sided surface (a Moebius band, a Klein bottle): no turning of faces makes every edge agree");
+  else if (r.inconsistently_oriented_edges > 0)
     line("hint", "lodkit convert IN OUT --orient turns faces to agree with their neighbours (simplify and pm "
                  "build do so on their own copy)");
   line("area", fmt::format("{:.9g}", r.area));

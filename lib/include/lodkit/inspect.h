@@ -36,6 +36,9 @@ struct MeshReport {
 
   bool manifold = false;           ///< no non-manifold edges or vertices
   bool oriented = false;           ///< manifold and consistently oriented
+  /// Manifold meshes: whether turning faces can make every edge agree (lodkit convert --orient, or
+  /// orient_consistently()); false for a Moebius band or a Klein bottle.
+  std::optional<bool> orientable;
   bool closed = false;             ///< manifold, non-empty and without boundary
   long long euler_characteristic = 0;
   std::optional<long long> genus;  ///< when oriented (orientable 2-manifold)

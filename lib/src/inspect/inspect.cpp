@@ -23,6 +23,30 @@ struct SortedTriangleHash {
   }
 };
 
+// Faces on welded vertices (classes `cls`), without those that repeat a welded vertex.
+std::vector<std::array<Index, 3>> welded_faces(const Mesh& mesh, const Eigen::VectorX<Index>& cls) {
+  std::vector<std::array<Index, 3>> faces;
+  faces.reserve(static_cast<std::size_t>(mesh.num_faces()));
+  for (Index f = 0; f < mesh.num_faces(); ++f) {
+    const auto t = mesh.triangles.row(f);
+    const std::array<Index, 3> w{cls[t[0]], cls[t[1]], cls[t[2]]};
+    if (w[0] != w[1] && w[1] != w[2] && w[0] != w[2]) faces.push_back(w);
+  }
+  return faces;
+}
+
+// Whether turning faces can make every edge of a manifold mesh agree: orient_consistently() turns
+// every patch that can be, so edges that still disagree on a turned copy lie in a non-orientable one.
+bool can_be_oriented(const Mesh& mesh, const Eigen::VectorX<Index>& cls) {
+  Mesh turned;
+  turned.positions = mesh.positions;
+  turned.triangles = mesh.triangles;
+  orient_consistently(turned);
+  for (const detail::EdgeUse& e : detail::classify_edges(welded_faces(turned, cls)))
+    if (e.faces == 2 && !e.consistent) return false;
+  return true;
+}
+
 }  // namespace
 
 MeshReport inspect(const Mesh& mesh) {
@@ -99,6 +123,7 @@ MeshReport inspect(const Mesh& mesh) {
   for (char bad : detail::non_manifold_fans(r.vertices, faces)) r.non_manifold_vertices += bad;
   r.manifold = r.non_manifold_edges == 0 && r.non_manifold_vertices == 0;
   r.oriented = r.manifold && r.inconsistently_oriented_edges == 0;
+  if (r.manifold) r.orientable = r.oriented || can_be_oriented(mesh, cls);
   r.closed = r.manifold && r.boundary_edges == 0 && !faces.empty();
   r.euler_characteristic = static_cast<long long>(r.welded_vertices) - r.edges +
                            static_cast<long long>(faces.size());
