@@ -149,7 +149,11 @@ TEST(Primitives, BadParametersAreClearErrors) {
   for (auto [make, expected] : std::initializer_list<std::pair<std::function<Mesh()>, const char*>>{
            {[] { return make_torus({.tolerance = 1e-12}); }, "torus: tolerance 1e-12 is too fine"},
            {[] { return make_cylinder({.tolerance = 1e-12}); }, "cylinder: tolerance 1e-12 is too fine"},
-           {[] { return make_cone({.tolerance = 1e-12}); }, "cone: tolerance 1e-12 is too fine"}}) {
+           {[] { return make_cone({.tolerance = 1e-12}); }, "cone: tolerance 1e-12 is too fine"},
+           // A radius so large that tolerance / radius vanishes next to 1: the segment estimate was an
+           // infinite double cast to int (undefined behaviour; found by fuzzing a CSG tree).
+           {[] { return make_cylinder({.radius = 4e59, .tolerance = 0.01}); }, "cylinder: tolerance 0.01 is too fine"},
+           {[] { return make_torus({.major_radius = 4e59, .minor_radius = 1, .tolerance = 0.01}); }, "torus: tolerance 0.01"}}) {
     try {
       make();
       ADD_FAILURE() << expected;

@@ -84,12 +84,18 @@ double circle_chordal_error(double radius, int segments) {
 int circle_segments_for_tolerance(double radius, double tolerance, const char* shape) {
   require_positive(tolerance, shape, "tolerance");
   if (tolerance >= radius) return 3;
-  int n = static_cast<int>(std::ceil(kPi / std::acos(1.0 - tolerance / radius)));
-  n = std::max(n, 3);
+  constexpr int kMost = 1 << 16;
+  const auto too_fine = [&] {
+    return fmt::format("tolerance {} is too fine: a circle of radius {} would need more than 65,536 segments", tolerance, radius);
+  };
+  // The estimate is infinite where tolerance / radius vanishes next to 1 (a radius of 4e59 cast it to
+  // int: undefined behaviour, found by fuzzing CSG trees); it is checked as a double first.
+  const double estimate = std::ceil(kPi / std::acos(1.0 - tolerance / radius));
+  require(estimate <= 2.0 * kMost, shape, too_fine());
+  int n = std::max(static_cast<int>(estimate), 3);
   while (n > 3 && circle_chordal_error(radius, n - 1) <= tolerance) --n;  // guard rounding
-  while (circle_chordal_error(radius, n) > tolerance) ++n;
-  require(n <= 1 << 16, shape,
-          fmt::format("tolerance {} is too fine: a circle of radius {} would need more than 65,536 segments", tolerance, radius));
+  while (n <= kMost && circle_chordal_error(radius, n) > tolerance) ++n;
+  require(n <= kMost, shape, too_fine());
   return n;
 }
 

@@ -57,8 +57,9 @@ double error_value(std::uint16_t code, double reference) {
 
 std::uint16_t error_code(double bound, double reference) {
   if (!(bound > 0)) return 0;
-  int code = static_cast<int>(std::ceil(std::log2(bound / reference) * kCodeSteps)) + kCodeZero + 1;
-  code = std::clamp(code, 1, 65535);
+  // (Clamped as a double: the code of a bound far past the reference is not an int.)
+  const double scaled = std::ceil(std::log2(bound / reference) * kCodeSteps) + kCodeZero + 1;
+  int code = scaled >= 65535 ? 65535 : scaled >= 1 ? static_cast<int>(scaled) : 1;
   while (code < 65535 && error_value(static_cast<std::uint16_t>(code), reference) < bound) ++code;
   return static_cast<std::uint16_t>(code);
 }
