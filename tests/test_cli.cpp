@@ -836,6 +836,13 @@ TEST(CliCsg, BooleansAndTreesEndToEnd) {
   const CliRun badtree = run(dir, "csg tree bad.json -o never.ply");
   EXPECT_EQ(badtree.status, 1);
   EXPECT_NE(badtree.err.find("$.children[0].sise: unknown key"), std::string::npos) << badtree.err;
+  // Errors found while evaluating name the tree's file too, beside the node's path (they named the path alone).
+  test::write_text(dir / "open.json", R"({"op": "union", "children": [{"primitive": "box"}, {"mesh": "open.ply"}]})");
+  const CliRun opentree = run(dir, "csg tree open.json -o never.ply");
+  EXPECT_EQ(opentree.status, 1);
+  EXPECT_NE(opentree.err.find("lodkit: error: open.json: $.children[1]: open.ply: is not closed"), std::string::npos)
+      << opentree.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "never.ply"));
 }
 
 }  // namespace

@@ -99,7 +99,12 @@ Example:
             const std::vector<std::string> inputs = files_read(opt->tree, root);
             refuse_to_overwrite(opt->output, inputs);
             refuse_json_beside_stdout(opt->json, opt->output);
-            const CsgResult r = evaluate(root, {.tolerance = opt->tolerance, .exact = opt->exact, .split_at_parts = opt->split_at_parts});
+            CsgResult r;
+            try {
+              r = evaluate(root, {.tolerance = opt->tolerance, .exact = opt->exact, .split_at_parts = opt->split_at_parts});
+            } catch (const Error& e) {  // "$.children[1]: ...": which file the JSON path is in
+              throw Error(fmt::format("{}: {}", opt->tree, e.what()));
+            }
             write_output(r.mesh, opt->output, opt->format, WriteOptions{}, inputs);
             report(global, opt->json, fmt::format("tree ({} primitives, {} operations)", r.primitives, r.operations), opt->output,
                    r.mesh, r.volume, r.seconds, r.warnings, false);
