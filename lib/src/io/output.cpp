@@ -1,16 +1,14 @@
 #include "io/output.h"
 
 #include <lodkit/error.h>
-
 #include <lodkit/io.h>
 
 #include <atomic>
 #include <cerrno>
 #include <cstring>
-#include <fmt/format.h>
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <random>
-#include <sys/stat.h>
 #include <unistd.h>
 
 namespace lodkit {
