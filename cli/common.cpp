@@ -26,12 +26,20 @@ MeshFormat stream_format(const std::optional<std::string>& format, const char* s
 
 }  // namespace
 
+std::string read_stdin() {
+  return std::string{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
+}
+
+void write_stdout(const std::string& bytes) {
+  std::fwrite(bytes.data(), 1, bytes.size(), stdout);
+  std::fflush(stdout);
+}
+
 Mesh read_input(const std::string& path, const std::optional<std::string>& format, const ReadOptions& options,
                 const char* format_option) {
   if (path == "-") {
     const MeshFormat f = stream_format(format, "<stdin>", format_option);  // (before waiting for stdin)
-    const std::string bytes{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
-    return read_mesh_from_memory(bytes, f, "<stdin>", options);
+    return read_mesh_from_memory(read_stdin(), f, "<stdin>", options);
   }
   ReadOptions with_format = options;
   if (format) with_format.format = stream_format(format, path.c_str(), format_option);
@@ -55,9 +63,7 @@ void refuse_json_beside_stdout(bool json, const std::string& output) {
 void write_output(const Mesh& mesh, const std::string& path, const std::optional<std::string>& format,
                   const WriteOptions& options, const std::vector<std::string>& inputs, const char* format_option) {
   if (path == "-") {
-    const std::string bytes = write_mesh_to_memory(mesh, stream_format(format, "<stdout>", format_option), options);
-    std::fwrite(bytes.data(), 1, bytes.size(), stdout);
-    std::fflush(stdout);
+    write_stdout(write_mesh_to_memory(mesh, stream_format(format, "<stdout>", format_option), options));
     return;
   }
   refuse_to_overwrite(path, inputs);

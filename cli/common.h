@@ -34,6 +34,10 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global);
 Command add_terrain_command(CLI::App& app, const GlobalOptions& global);
 Command add_subdivide_command(CLI::App& app, const GlobalOptions& global);
 
+/// All of stdin, and bytes to stdout (flushed).
+std::string read_stdin();
+void write_stdout(const std::string& bytes);
+
 /// Reads `path`, or stdin when it is "-" (then `format` names the format; when missing, the error
 /// names `format_option`, the command's option for it, or says the command reads files only if null).
 Mesh read_input(const std::string& path, const std::optional<std::string>& format, const ReadOptions& options = {},

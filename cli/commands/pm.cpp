@@ -6,10 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <cstdio>
 #include <fmt/format.h>
-#include <iostream>
-#include <iterator>
 #include <memory>
 
 #include "common.h"
@@ -41,9 +38,7 @@ struct PmCliOptions {
 
 // A stream from a file, or from stdin when `path` is "-".
 PmReadResult read_pm_input(const std::string& path, const PmReadOptions& options = {}) {
-  if (path != "-") return read_pm(path, options);
-  const std::string bytes{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
-  return read_pm_from_memory(bytes, "<stdin>", options);
+  return path == "-" ? read_pm_from_memory(read_stdin(), "<stdin>", options) : read_pm(path, options);
 }
 
 int run_build(const PmCliOptions& o, const GlobalOptions& global) {
@@ -78,10 +73,8 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   w.splits_per_block = o.block;
   const auto t1 = std::chrono::steady_clock::now();
   PmStreamStats stats;
-  if (o.output == "-") {  // (to another process: progressive transmission)
-    const std::string bytes = write_pm_to_memory(pm, w, &stats);
-    std::fwrite(bytes.data(), 1, bytes.size(), stdout);
-    std::fflush(stdout);
+  if (o.output == "-") {
+    write_stdout(write_pm_to_memory(pm, w, &stats));  // (to another process: progressive transmission)
   } else {
     stats = write_pm(pm, o.output, w);
   }
