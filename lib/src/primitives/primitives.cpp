@@ -7,6 +7,7 @@
 #include <string>
 #include <fmt/format.h>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include "core/geometry.h"
@@ -81,22 +82,36 @@ double circle_chordal_error(double radius, int segments) {
   return radius * (1.0 - std::cos(kPi / segments));
 }
 
-int circle_segments_for_tolerance(double radius, double tolerance, const char* shape) {
-  require_positive(tolerance, shape, "tolerance");
+namespace {
+
+constexpr int kMostSegments = 1 << 16;
+
+// The fewest segments within `tolerance` (positive), or none past kMostSegments. The estimate is
+// infinite where tolerance / radius vanishes next to 1 (a radius of 4e59 cast it to int: undefined
+// behaviour, found by fuzzing CSG trees), so it is checked as a double first.
+std::optional<int> fewest_segments(double radius, double tolerance) {
   if (tolerance >= radius) return 3;
-  constexpr int kMost = 1 << 16;
-  const auto too_fine = [&] {
-    return fmt::format("tolerance {} is too fine: a circle of radius {} would need more than 65,536 segments", tolerance, radius);
-  };
-  // The estimate is infinite where tolerance / radius vanishes next to 1 (a radius of 4e59 cast it to
-  // int: undefined behaviour, found by fuzzing CSG trees); it is checked as a double first.
   const double estimate = std::ceil(kPi / std::acos(1.0 - tolerance / radius));
-  require(estimate <= 2.0 * kMost, shape, too_fine());
+  if (!(estimate <= 2.0 * kMostSegments)) return std::nullopt;
   int n = std::max(static_cast<int>(estimate), 3);
   while (n > 3 && circle_chordal_error(radius, n - 1) <= tolerance) --n;  // guard rounding
-  while (n <= kMost && circle_chordal_error(radius, n) > tolerance) ++n;
-  require(n <= kMost, shape, too_fine());
+  while (n <= kMostSegments && circle_chordal_error(radius, n) > tolerance) ++n;
+  if (n > kMostSegments) return std::nullopt;
   return n;
+}
+
+std::string too_fine(double tolerance, double radius, const char* share = "") {
+  return fmt::format("tolerance {} is too fine: a circle of radius {} would need more than 65,536 segments{}", tolerance,
+                     radius, share);
+}
+
+}  // namespace
+
+int circle_segments_for_tolerance(double radius, double tolerance, const char* shape) {
+  require_positive(tolerance, shape, "tolerance");
+  const std::optional<int> n = fewest_segments(radius, tolerance);
+  require(n.has_value(), shape, too_fine(tolerance, radius));
+  return *n;
 }
 
 double uv_sphere_chordal_error(double radius, int segments, int rings) {
@@ -343,11 +358,10 @@ Mesh make_torus(const TorusOptions& o) {
     // Split the budget evenly, then coarsen each direction while the bound still holds. (The
     // message names the tolerance asked for, not its half.)
     const double outer = o.major_radius + o.minor_radius;
-    require(circle_chordal_error(outer, 1 << 16) <= t / 2 && circle_chordal_error(o.minor_radius, 1 << 16) <= t / 2,
-            "torus", fmt::format("tolerance {} is too fine: a circle of radius {} would need more than 65,536 segments "
-                                 "for half of it", t, circle_chordal_error(outer, 1 << 16) > t / 2 ? outer : o.minor_radius));
-    nu = circle_segments_for_tolerance(outer, t / 2, "torus");
-    nv = circle_segments_for_tolerance(o.minor_radius, t / 2, "torus");
+    const std::optional<int> around = fewest_segments(outer, t / 2), across = fewest_segments(o.minor_radius, t / 2);
+    require(around && across, "torus", too_fine(t, around ? o.minor_radius : outer, " for half of it"));
+    nu = *around;
+    nv = *across;
     while (nu > 3 && torus_chordal_error(o.major_radius, o.minor_radius, nu - 1, nv) <= t) --nu;
     while (nv > 3 && torus_chordal_error(o.major_radius, o.minor_radius, nu, nv - 1) <= t) --nv;
   }
