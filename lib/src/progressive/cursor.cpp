@@ -8,32 +8,18 @@
 #include <fmt/format.h>
 #include <numeric>
 
+#include "progressive/split_state.h"
+
 namespace lodkit {
 
 PMCursor::PMCursor(const ProgressiveMesh& pm) : pm_(&pm) {
-  positions_.resize(static_cast<std::size_t>(pm.num_points(pm.max_level())));
-  std::copy(pm.base_positions.begin(), pm.base_positions.end(), positions_.begin());
-  for (std::size_t j = 0; j < pm.splits.size(); ++j) positions_[pm.base_points + j] = pm.splits[j].new_position;
-  attributes_ = pm.wedge_attributes;
-  corners_.resize(3 * pm.face_corners.size());
-  for (std::size_t f = 0; f < pm.face_corners.size(); ++f)
-    for (int k = 0; k < 3; ++k) corners_[3 * f + k] = pm.face_corners[f][k];
+  detail::SplitState base = detail::base_state(pm);
+  positions_ = std::move(base.positions);
+  attributes_ = std::move(base.attributes);
+  corners_ = std::move(base.corners);
 }
 
-void PMCursor::apply(Index split, bool fine) {
-  const VertexSplit& s = pm_->splits[static_cast<std::size_t>(split)];
-  const CornerChange* c = pm_->corner_changes.data() + s.first_change;
-  for (Index i = 0; i < s.num_changes; ++i)
-    corners_[static_cast<std::size_t>(c[i].corner)] = fine ? c[i].fine_wedge : c[i].coarse_wedge;
-  positions_[static_cast<std::size_t>(s.point)] = fine ? s.position : s.coarse_position;
-  // attribute_values holds the coarse values, then the fine ones.
-  const std::size_t dims = static_cast<std::size_t>(pm_->attribute_dims);
-  for (Index i = 0; i < s.num_attribute_changes; ++i) {
-    const AttributeChange& a = pm_->attribute_changes[static_cast<std::size_t>(s.first_attribute_change + i)];
-    std::copy_n(&pm_->attribute_values[static_cast<std::size_t>(a.first_value) + (fine ? dims : 0)], dims,
-                &attributes_[dims * static_cast<std::size_t>(a.wedge)]);
-  }
-}
+void PMCursor::apply(Index split, bool fine) { detail::apply_split(*pm_, split, fine, positions_, attributes_, corners_); }
 
 bool PMCursor::refine() {
   if (level_ >= pm_->max_level()) return false;
@@ -102,12 +88,8 @@ ExtractedLevel PMCursor::extract(VertexOrder order) const {
     row_of[static_cast<std::size_t>(w)] = row;
     out.vertex_wedge[static_cast<std::size_t>(row)] = w;
     out.vertex_origin[static_cast<std::size_t>(row)] = input_order ? pm.wedge_input[static_cast<std::size_t>(w)] : w;
-    m.positions.row(row) = positions_[static_cast<std::size_t>(pm.wedge_point[static_cast<std::size_t>(w)])].transpose();
-    const double* a = wedge_attributes(w);
-    int i = 0;
-    if (pm.has_normals) for (int d = 0; d < 3; ++d) m.attributes.normals(row, d) = a[i++];
-    if (pm.has_uvs) for (int d = 0; d < 2; ++d) m.attributes.uvs(row, d) = a[i++];
-    if (pm.has_colours) for (int d = 0; d < 4; ++d) m.attributes.colours(row, d) = static_cast<float>(a[i++]);
+    detail::put_wedge(pm, positions_[static_cast<std::size_t>(pm.wedge_point[static_cast<std::size_t>(w)])],
+                      wedge_attributes(w), m, row);
   };
   if (whole_input) {
     // Input numbering exactly: wedges and extra vertices go to their input rows.
