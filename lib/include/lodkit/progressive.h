@@ -24,6 +24,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 namespace lodkit {
@@ -276,5 +277,70 @@ ProvedLevel prove_level_within(const ProgressiveMesh& pm, const Mesh& input, dou
 
 /// The bounding sphere radius used by level_for_view (half the bounding box diagonal).
 double bounding_radius(const ProgressiveMesh& pm);
+
+/// A viewer for selective refinement: where the eye is, where it looks, and the error it tolerates.
+struct Viewpoint {
+  Eigen::Vector3d eye{0, 0, 10};
+  Eigen::Vector3d look_at{0, 0, 0};
+  double fov_degrees = 60.0;        ///< vertical field of view
+  double viewport_pixels = 1080.0;  ///< viewport height
+  double aspect = 16.0 / 9.0;       ///< viewport width over height
+  double pixel_error = 1.0;
+  bool cull = true;  ///< leave what lies outside the view cone (around the frustum) coarse
+};
+
+/// A selectively refined mesh and what it guarantees.
+struct SelectiveLevel {
+  ExtractedLevel extracted;  ///< stream order; `level` is the number of splits applied
+  Index splits_applied = 0;
+  /// Hausdorff bound between this mesh and the finest level: the largest of its points' bounds.
+  double error_bound = 0.0;
+  /// By a view: the largest number of pixels a bound of a region in view projects to (at most the
+  /// budget unless the finest level is reached there), and how many regions were left coarse outside it.
+  double max_pixels = 0.0;
+  Index regions_outside = 0;
+};
+
+/// Selective refinement (Hoppe 1996, section 5): a mesh that applies only the splits a viewer needs,
+/// fine near the eye and coarse far from it or out of view. Split j is applied only after every split
+/// that created or changed a face around its point by then (its dependencies), so the point's
+/// neighbourhood is exactly what the uniform level j had and the split leaves a valid mesh: any
+/// dependency-closed set of splits, applied in order, gives a manifold mesh with the input's topology.
+/// Each split's region is a ball around the input vertices its point stands for, and its error the
+/// bound |position - centre| + radius, as for level_error (conservative, loose sideways).
+class SelectiveRefiner {
+ public:
+  /// Finds every split's dependencies and region (time and memory linear in the stream). `pm` must
+  /// outlive the refiner.
+  explicit SelectiveRefiner(const ProgressiveMesh& pm);
+
+  /// The splits split `split` needs applied first (all earlier).
+  std::span<const Index> dependencies(Index split) const;
+  /// The ball of the input vertices split `split`'s point stands for just before it, and that point's
+  /// error bound there.
+  const Eigen::Vector3d& region_centre(Index split) const { return centre_[static_cast<std::size_t>(split)]; }
+  double region_radius(Index split) const { return radius_[static_cast<std::size_t>(split)]; }
+  double region_error(Index split) const { return error_[static_cast<std::size_t>(split)]; }
+
+  /// Applies the splits `wanted` marks (one entry per split) and every split they depend on, in order.
+  /// \throw Error unless `wanted` has one entry per split.
+  SelectiveLevel refine(std::vector<char> wanted) const;
+  /// Applies the splits whose region is in view with an error projecting to more than
+  /// view.pixel_error pixels (error * H / (2 d tan(fov / 2)), d the distance from the eye to the
+  /// region's ball), and their dependencies. \throw Error for a bad view.
+  SelectiveLevel refine_for_view(const Viewpoint& view) const;
+
+ private:
+  void close(std::vector<char>& wanted) const;  // adds every dependency
+  /// Per point that exists, its first split not applied: the regions left coarse.
+  std::vector<Index> frontier(const std::vector<char>& applied) const;
+  SelectiveLevel apply_closed(const std::vector<char>& applied) const;
+
+  const ProgressiveMesh* pm_;
+  std::vector<Index> dependency_start_, dependencies_;  // CSR: split j's are [start[j], start[j + 1])
+  std::vector<Index> previous_at_point_;                // per split: the last earlier split of its point, or -1
+  std::vector<Eigen::Vector3d> centre_;
+  std::vector<double> radius_, error_;
+};
 
 }  // namespace lodkit

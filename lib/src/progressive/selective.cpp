@@ -1,0 +1,239 @@
+// Selective refinement: any dependency-closed set of splits, applied in stream order.
+//
+// Why the dependencies make it valid: split j rewrites only the faces around its point s (corners move
+// to the new point t, two faces open along s-l and s-r). Its dependencies are the splits that created s
+// and every split that created or changed a face around s in level j - 1. Closed under dependencies,
+// a set holds every split that ever touched those faces (each such split depends on the one before
+// it), among them every earlier split of s (the last one's faces are still around s), so in the
+// selective mesh s has exactly the faces, with exactly the corners, it has in level j - 1, and the
+// split does there what it does in the uniform sequence. Positions elsewhere may be coarser, so a face
+// can fold where a uniform level would not; the topology is always the input's.
+#include <lodkit/error.h>
+#include <lodkit/progressive.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <numbers>
+
+#include "progressive/split_state.h"
+
+namespace lodkit {
+namespace {
+
+struct Ball {
+  Eigen::Vector3d centre;
+  double radius;
+};
+
+// The smallest ball holding both.
+Ball enclosing(const Ball& a, const Ball& b) {
+  const double d = (b.centre - a.centre).norm();
+  if (d + b.radius <= a.radius) return a;
+  if (d + a.radius <= b.radius) return b;
+  const double radius = 0.5 * (d + a.radius + b.radius);
+  // d > 0 here: equal centres would have one ball inside the other.
+  return {a.centre + (radius - a.radius) / d * (b.centre - a.centre), radius};
+}
+
+// Removes one occurrence of f from the list, if there.
+void erase_one(std::vector<Index>& list, Index f) {
+  if (const auto it = std::find(list.begin(), list.end(), f); it != list.end()) {
+    *it = list.back();
+    list.pop_back();
+  }
+}
+
+void check_view(const Viewpoint& v) {
+  auto fail = [](const std::string& what) { throw Error("selective refinement: " + what); };
+  if (!v.eye.allFinite() || !v.look_at.allFinite()) fail("the eye and the point looked at must be finite");
+  if (v.cull && !((v.look_at - v.eye).norm() > 0)) fail("the point looked at must differ from the eye");
+  if (!(v.fov_degrees > 0 && v.fov_degrees < 180))
+    fail(fmt::format("field of view must be in (0, 180) degrees, got {}", v.fov_degrees));
+  if (!(v.viewport_pixels > 0) || !std::isfinite(v.viewport_pixels))
+    fail(fmt::format("viewport height must be positive, got {}", v.viewport_pixels));
+  if (!(v.aspect > 0) || !std::isfinite(v.aspect)) fail(fmt::format("aspect ratio must be positive, got {}", v.aspect));
+  if (!(v.pixel_error >= 0) || !std::isfinite(v.pixel_error))
+    fail(fmt::format("pixel error must be finite and not negative, got {}", v.pixel_error));
+}
+
+}  // namespace
+
+SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
+  validate(pm);
+  const std::size_t n = pm.splits.size();
+  const std::size_t points = static_cast<std::size_t>(pm.num_points(pm.max_level()));
+  auto point_of = [&](Index wedge) { return pm.wedge_point[static_cast<std::size_t>(wedge)]; };
+
+  // Walk the uniform sequence, keeping each point's faces and each face's last split.
+  detail::SplitState state = detail::base_state(pm);
+  std::vector<std::vector<Index>> faces_at(points);
+  std::vector<Index> stamp(pm.face_corners.size(), -1), last_at_point(points, -1);
+  auto add_face = [&](Index f) {
+    for (int k = 0; k < 3; ++k)
+      faces_at[static_cast<std::size_t>(point_of(state.corners[3 * static_cast<std::size_t>(f) + k]))].push_back(f);
+  };
+  for (Index f = 0; f < pm.base_faces; ++f) add_face(f);
+  dependency_start_.assign(n + 1, 0);
+  previous_at_point_.assign(n, -1);
+  std::vector<Index> found;
+  for (std::size_t j = 0; j < n; ++j) {
+    const VertexSplit& split = pm.splits[j];
+    const std::size_t s = static_cast<std::size_t>(split.point);
+    found.clear();
+    if (split.point >= pm.base_points) found.push_back(split.point - pm.base_points);  // s's own split
+    for (Index f : faces_at[s])
+      if (stamp[static_cast<std::size_t>(f)] >= 0) found.push_back(stamp[static_cast<std::size_t>(f)]);
+    std::sort(found.begin(), found.end());
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    dependencies_.insert(dependencies_.end(), found.begin(), found.end());
+    dependency_start_[j + 1] = static_cast<Index>(dependencies_.size());
+    previous_at_point_[j] = last_at_point[s];
+    last_at_point[s] = static_cast<Index>(j);
+
+    // The split itself: corners that move to another point take their face along.
+    const CornerChange* c = pm.corner_changes.data() + split.first_change;
+    for (Index i = 0; i < split.num_changes; ++i) {
+      const std::size_t corner = static_cast<std::size_t>(c[i].corner);
+      const Index f = static_cast<Index>(corner / 3), from = point_of(state.corners[corner]), to = point_of(c[i].fine_wedge);
+      state.corners[corner] = c[i].fine_wedge;
+      stamp[corner / 3] = static_cast<Index>(j);
+      if (from == to) continue;
+      erase_one(faces_at[static_cast<std::size_t>(from)], f);
+      faces_at[static_cast<std::size_t>(to)].push_back(f);
+    }
+    for (Index f = split.first_face; f < split.first_face + split.num_faces; ++f) {
+      add_face(f);
+      stamp[static_cast<std::size_t>(f)] = static_cast<Index>(j);
+    }
+  }
+
+  // Regions, from the finest level up: the ball of a point before split j holds its balls after the
+  // split and the new point's.
+  std::vector<Ball> ball(points);
+  for (std::size_t p = 0; p < points; ++p) ball[p] = {p < static_cast<std::size_t>(pm.base_points) ? pm.base_positions[p]
+                                                                                                  : pm.splits[p - pm.base_points].new_position, 0.0};
+  for (const VertexSplit& split : pm.splits) ball[static_cast<std::size_t>(split.point)].centre = split.position;
+  centre_.resize(n);
+  radius_.resize(n);
+  error_.resize(n);
+  for (std::size_t j = n; j-- > 0;) {
+    const VertexSplit& split = pm.splits[j];
+    Ball& b = ball[static_cast<std::size_t>(split.point)];
+    b = enclosing(b, ball[static_cast<std::size_t>(pm.base_points) + j]);
+    centre_[j] = b.centre;
+    radius_[j] = b.radius;
+    error_[j] = (split.coarse_position - b.centre).norm() + b.radius;
+  }
+}
+
+std::span<const Index> SelectiveRefiner::dependencies(Index split) const {
+  const std::size_t j = static_cast<std::size_t>(split);
+  return {dependencies_.data() + dependency_start_[j], dependencies_.data() + dependency_start_[j + 1]};
+}
+
+void SelectiveRefiner::close(std::vector<char>& wanted) const {
+  // Dependencies are earlier: one pass from the last split down closes the set.
+  for (std::size_t j = wanted.size(); j-- > 0;)
+    if (wanted[j])
+      for (Index d : dependencies(static_cast<Index>(j))) wanted[static_cast<std::size_t>(d)] = 1;
+}
+
+std::vector<Index> SelectiveRefiner::frontier(const std::vector<char>& applied) const {
+  const ProgressiveMesh& pm = *pm_;
+  std::vector<Index> out;
+  for (std::size_t j = 0; j < applied.size(); ++j) {
+    const Index point = pm.splits[j].point, previous = previous_at_point_[j];
+    const bool exists = point < pm.base_points || applied[static_cast<std::size_t>(point - pm.base_points)];
+    if (!applied[j] && exists && (previous < 0 || applied[static_cast<std::size_t>(previous)])) out.push_back(static_cast<Index>(j));
+  }
+  return out;
+}
+
+SelectiveLevel SelectiveRefiner::refine(std::vector<char> wanted) const {
+  if (wanted.size() != pm_->splits.size())
+    throw Error(fmt::format("selective refinement: {} entries given for {} splits", wanted.size(), pm_->splits.size()));
+  close(wanted);
+  return apply_closed(wanted);
+}
+
+SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied) const {
+  const ProgressiveMesh& pm = *pm_;
+  const std::size_t n = pm.splits.size();
+  detail::SplitState state = detail::base_state(pm);
+  std::vector<Index> faces(static_cast<std::size_t>(pm.base_faces));
+  for (Index f = 0; f < pm.base_faces; ++f) faces[static_cast<std::size_t>(f)] = f;
+  SelectiveLevel out;
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!applied[j]) continue;
+    detail::apply_split(pm, static_cast<Index>(j), true, state.positions, state.attributes, state.corners);
+    for (Index f = pm.splits[j].first_face; f < pm.splits[j].first_face + pm.splits[j].num_faces; ++f) faces.push_back(f);
+    ++out.splits_applied;
+  }
+  // The error: at each point, the bound before its first split not applied.
+  for (Index j : frontier(applied)) out.error_bound = std::max(out.error_bound, error_[static_cast<std::size_t>(j)]);
+
+  // The mesh, in stream order: faces by number, then the wedges they use by number.
+  ExtractedLevel& e = out.extracted;
+  e.level = out.splits_applied;
+  const std::size_t wedges = pm.wedge_point.size();
+  std::vector<Index> row_of(wedges, -1);
+  for (Index f : faces)
+    for (int k = 0; k < 3; ++k) row_of[static_cast<std::size_t>(state.corners[3 * static_cast<std::size_t>(f) + k])] = 0;
+  for (std::size_t w = 0; w < wedges; ++w)
+    if (row_of[w] == 0) row_of[w] = static_cast<Index>(e.vertex_wedge.size()), e.vertex_wedge.push_back(static_cast<Index>(w));
+  const Index nv = static_cast<Index>(e.vertex_wedge.size()), nf = static_cast<Index>(faces.size());
+  Mesh& m = e.mesh;
+  m.positions.resize(nv, 3);
+  m.triangles.resize(nf, 3);
+  if (pm.has_normals) m.attributes.normals.resize(nv, 3);
+  if (pm.has_uvs) m.attributes.uvs.resize(nv, 2);
+  if (pm.has_colours) m.attributes.colours.resize(nv, 4);
+  if (pm.has_face_colours) m.attributes.face_colours.resize(nf, 4);
+  e.vertex_origin = e.vertex_wedge;
+  for (Index row = 0; row < nv; ++row) {
+    const Index w = e.vertex_wedge[static_cast<std::size_t>(row)];
+    detail::put_wedge(pm, state.positions[static_cast<std::size_t>(pm.wedge_point[static_cast<std::size_t>(w)])],
+                      state.attributes.data() + static_cast<std::size_t>(pm.attribute_dims) * static_cast<std::size_t>(w), m, row);
+  }
+  for (Index i = 0; i < nf; ++i) {
+    const std::size_t f = static_cast<std::size_t>(faces[static_cast<std::size_t>(i)]);
+    for (int k = 0; k < 3; ++k) m.triangles(i, k) = row_of[static_cast<std::size_t>(state.corners[3 * f + k])];
+    if (pm.has_face_colours) m.attributes.face_colours.row(i) = pm.face_colours.row(static_cast<Index>(f));
+  }
+  return out;
+}
+
+SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view) const {
+  check_view(view);
+  const std::size_t n = pm_->splits.size();
+  const double tan_half = std::tan(0.5 * view.fov_degrees * std::numbers::pi / 180.0);
+  // The cone around the frustum: its half-angle reaches the viewport's corners.
+  const double cone = std::atan(tan_half * std::sqrt(1.0 + view.aspect * view.aspect));
+  const double cone_cos = std::cos(cone), cone_sin = std::sin(cone);
+  const Eigen::Vector3d axis = view.cull ? Eigen::Vector3d((view.look_at - view.eye).normalized()) : Eigen::Vector3d::Zero();
+  auto in_view = [&](std::size_t j) {
+    if (!view.cull) return true;
+    // p cos - a sin bounds the distance from the centre to the cone from below (exact beside its side).
+    const Eigen::Vector3d v = centre_[j] - view.eye;
+    const double along = v.dot(axis), across = (v - along * axis).norm();
+    return across * cone_cos - along * cone_sin <= radius_[j];
+  };
+  auto pixels = [&](std::size_t j) {
+    const double d = (centre_[j] - view.eye).norm() - radius_[j];
+    if (!(d > 0)) return error_[j] > 0 ? INFINITY : 0.0;
+    return error_[j] * view.viewport_pixels / (2.0 * d * tan_half);
+  };
+  std::vector<char> wanted(n, 0);
+  for (std::size_t j = 0; j < n; ++j) wanted[j] = in_view(j) && pixels(j) > view.pixel_error;
+  close(wanted);
+  SelectiveLevel out = apply_closed(wanted);
+  // What the viewer sees: the regions left coarse, each at its point's first split not applied.
+  for (Index j : frontier(wanted)) {
+    if (in_view(static_cast<std::size_t>(j))) out.max_pixels = std::max(out.max_pixels, pixels(static_cast<std::size_t>(j)));
+    else ++out.regions_outside;
+  }
+  return out;
+}
+
+}  // namespace lodkit

@@ -1,0 +1,229 @@
+// Selective refinement: any dependency-closed set of splits gives a valid mesh with the input's
+// topology, prefixes give the uniform levels exactly, the error bound holds, and a viewer's mesh is
+// fine near the eye, coarse far away and out of view.
+#include <gtest/gtest.h>
+#include <lodkit/error.h>
+#include <lodkit/inspect.h>
+#include <lodkit/metrics.h>
+#include <lodkit/primitives.h>
+#include <lodkit/progressive.h>
+#include <lodkit/terrain.h>
+
+#include <fmt/format.h>
+#include <random>
+
+#include "test_util.h"
+
+namespace lodkit {
+namespace {
+
+void expect_identical(const Mesh& a, const Mesh& b, const std::string& what) {
+  ASSERT_EQ(a.num_vertices(), b.num_vertices()) << what;
+  ASSERT_EQ(a.num_faces(), b.num_faces()) << what;
+  EXPECT_TRUE(a.positions == b.positions) << what;
+  EXPECT_TRUE(a.triangles == b.triangles) << what;
+  EXPECT_TRUE(a.attributes.normals == b.attributes.normals) << what;
+  EXPECT_TRUE(a.attributes.uvs == b.attributes.uvs) << what;
+  EXPECT_TRUE(a.attributes.colours == b.attributes.colours) << what;
+  EXPECT_TRUE(a.attributes.face_colours == b.attributes.face_colours) << what;
+}
+
+Mesh seamed_sphere() {
+  UvSphereOptions o;
+  o.segments = 24;
+  o.rings = 12;
+  o.uvs = true;
+  Mesh m = make_uv_sphere(o);
+  m.attributes.normals = compute_vertex_normals(m);
+  return m;
+}
+
+Mesh small_terrain(int levels = 5) {
+  TerrainOptions o;
+  o.levels = levels;
+  o.colour = true;
+  return generate_terrain(make_terrain_base(TerrainBase::Grid), o).mesh;
+}
+
+std::vector<Mesh> inputs() { return {test::bumpy_sphere(3, 0.05), seamed_sphere(), make_grid({}), small_terrain(4)}; }
+
+TEST(SelectiveRefinement, NoSplitsGiveTheBaseAndEverySplitTheFinestLevel) {
+  for (const Mesh& input : inputs()) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    const SelectiveRefiner refiner(pm);
+    const std::size_t n = pm.splits.size();
+    ASSERT_GT(n, 10u);
+    expect_identical(refiner.refine(std::vector<char>(n, 0)).extracted.mesh, extract_level(pm, 0, VertexOrder::Stream).mesh, "none");
+    const SelectiveLevel all = refiner.refine(std::vector<char>(n, 1));
+    expect_identical(all.extracted.mesh, extract_level(pm, pm.max_level(), VertexOrder::Stream).mesh, "all");
+    EXPECT_EQ(all.splits_applied, pm.max_level());
+    EXPECT_EQ(all.error_bound, 0.0);
+    // Asking for the last split alone asks for every split its point's neighbourhood ever saw.
+    std::vector<char> last(n, 0);
+    last.back() = 1;
+    EXPECT_GT(refiner.refine(last).splits_applied, 1);
+  }
+}
+
+TEST(SelectiveRefinement, PrefixesGiveTheUniformLevelsExactly) {
+  for (const Mesh& input : inputs()) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    const SelectiveRefiner refiner(pm);
+    for (Index level : {Index(1), pm.max_level() / 3, pm.max_level() / 2, pm.max_level() - 1}) {
+      std::vector<char> wanted(pm.splits.size(), 0);
+      std::fill(wanted.begin(), wanted.begin() + level, 1);
+      const SelectiveLevel s = refiner.refine(wanted);
+      EXPECT_EQ(s.splits_applied, level);  // a prefix is closed: dependencies are earlier
+      expect_identical(s.extracted.mesh, extract_level(pm, level, VertexOrder::Stream).mesh, fmt::format("level {}", level));
+      EXPECT_LE(s.error_bound, pm.level_error[static_cast<std::size_t>(level)] * (1 + 1e-12));
+    }
+  }
+}
+
+TEST(SelectiveRefinement, EveryClosedSetGivesAValidMeshWithTheInputsTopology) {
+  std::mt19937 rng(11);
+  for (const Mesh& input : inputs()) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    const SelectiveRefiner refiner(pm);
+    const std::size_t n = pm.splits.size();
+    for (std::size_t j = 0; j < n; ++j)
+      for (Index d : refiner.dependencies(static_cast<Index>(j))) ASSERT_LT(d, static_cast<Index>(j));
+    const MeshReport finest = inspect(extract_level(pm, pm.max_level(), VertexOrder::Stream).mesh);
+    for (double density : {0.001, 0.01, 0.05, 0.2}) {
+      for (int trial = 0; trial < 5; ++trial) {
+        std::bernoulli_distribution pick(density);
+        std::vector<char> wanted(n);
+        for (char& w : wanted) w = pick(rng);
+        const SelectiveLevel s = refiner.refine(wanted);
+        const Mesh& m = s.extracted.mesh;
+        // The faces are the base's and those the closed set's splits open.
+        std::vector<char> closed = wanted;
+        for (std::size_t j = n; j-- > 0;)
+          if (closed[j])
+            for (Index d : refiner.dependencies(static_cast<Index>(j))) closed[static_cast<std::size_t>(d)] = 1;
+        Index faces = pm.base_faces, applied = 0;
+        for (std::size_t j = 0; j < n; ++j)
+          if (closed[j]) faces += pm.splits[j].num_faces, ++applied;
+        EXPECT_EQ(s.splits_applied, applied);
+        EXPECT_EQ(m.num_faces(), faces);
+        for (Index f = 0; f < m.num_faces(); ++f)
+          ASSERT_TRUE(m.triangles(f, 0) != m.triangles(f, 1) && m.triangles(f, 1) != m.triangles(f, 2) &&
+                      m.triangles(f, 0) != m.triangles(f, 2));
+        const MeshReport r = inspect(m);
+        const std::string what = fmt::format("density {}, trial {}: {} of {} splits", density, trial, s.splits_applied, n);
+        EXPECT_EQ(r.non_manifold_edges, 0) << what;
+        EXPECT_EQ(r.non_manifold_vertices, 0) << what;
+        EXPECT_EQ(r.inconsistently_oriented_edges, 0) << what;
+        EXPECT_EQ(r.euler_characteristic, finest.euler_characteristic) << what;
+        EXPECT_EQ(r.boundary_loops, finest.boundary_loops) << what;
+        EXPECT_EQ(r.components, finest.components) << what;
+        EXPECT_EQ(r.unreferenced_vertices, 0) << what;
+      }
+    }
+  }
+}
+
+TEST(SelectiveRefinement, TheErrorBoundHoldsAgainstTheFinestLevel) {
+  std::mt19937 rng(5);
+  for (const Mesh& input : {test::bumpy_sphere(3, 0.08), small_terrain(5)}) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    const SelectiveRefiner refiner(pm);
+    const ExtractedLevel finest_level = extract_level(pm, pm.max_level(), VertexOrder::Stream);
+    const Mesh& finest = finest_level.mesh;
+    for (double density : {0.002, 0.02, 0.1}) {
+      std::bernoulli_distribution pick(density);
+      std::vector<char> wanted(pm.splits.size());
+      for (char& w : wanted) w = pick(rng);
+      const SelectiveLevel s = refiner.refine(wanted);
+      const Comparison c = compare(finest, s.extracted.mesh);
+      EXPECT_GT(s.error_bound, 0.0);
+      EXPECT_LE(c.hausdorff, s.error_bound * (1 + 1e-9)) << "density " << density;
+      // What the bound bounds: each finest vertex's distance to its ancestor in the selective mesh.
+      std::vector<Index> row_of(pm.wedge_point.size(), -1);
+      const ExtractedLevel& e = s.extracted;
+      for (std::size_t r = 0; r < e.vertex_wedge.size(); ++r) row_of[static_cast<std::size_t>(e.vertex_wedge[r])] = static_cast<Index>(r);
+      double farthest = 0;
+      for (Index v = 0; v < finest.num_vertices(); ++v) {
+        Index w = finest_level.vertex_wedge[static_cast<std::size_t>(v)];
+        while (row_of[static_cast<std::size_t>(w)] < 0) w = pm.wedge_parent[static_cast<std::size_t>(w)];
+        farthest = std::max(farthest, (finest.positions.row(v) - e.mesh.positions.row(row_of[static_cast<std::size_t>(w)])).norm());
+      }
+      EXPECT_LE(farthest, s.error_bound * (1 + 1e-9)) << "density " << density;
+      EXPECT_GT(farthest, 0.5 * s.error_bound) << "density " << density;  // and not far looser
+    }
+  }
+}
+
+TEST(SelectiveRefinement, AViewerGetsDetailNearTheEyeOnly) {
+  // A terrain seen from just above one corner, looking across it, in a small viewport (so that its
+  // 64 x 64 grid spans a viewer's range of detail).
+  const ProgressiveMesh pm = build_progressive_mesh(small_terrain(6));
+  const SelectiveRefiner refiner(pm);
+  Viewpoint view;
+  view.eye = {-0.55, -0.55, 0.05};
+  view.look_at = {0.5, 0.5, 0.0};
+  view.viewport_pixels = 100;
+  view.pixel_error = 2.0;
+  const SelectiveLevel s = refiner.refine_for_view(view);
+  const Mesh& m = s.extracted.mesh;
+  EXPECT_LE(s.max_pixels, view.pixel_error);
+  EXPECT_GT(s.max_pixels, 0.5 * view.pixel_error);  // not far finer than asked
+  EXPECT_GT(m.num_faces(), pm.base_faces);
+  EXPECT_LT(m.num_faces(), pm.num_faces(pm.max_level()));
+  // Vertices in the quarter nearest the eye against the farthest quarter.
+  int near = 0, far = 0;
+  for (Index v = 0; v < m.num_vertices(); ++v) {
+    const double x = m.positions(v, 0), y = m.positions(v, 1);
+    near += x < -0.25 && y < -0.25;
+    far += x > 0.25 && y > 0.25;
+  }
+  EXPECT_GT(near, 3 * far / 2) << near << " near, " << far << " far";
+  // The eye is inside the bounding sphere: a uniform level within the budget everywhere is the finest.
+  const ScreenSpaceBudget uniform{view.pixel_error, (pm.bounds.center() - view.eye).norm(), view.fov_degrees, view.viewport_pixels};
+  EXPECT_EQ(level_for_view(pm, uniform), pm.max_level());
+
+  // Looking away from above, nothing is in view: the base mesh, every region outside.
+  Viewpoint away = view;
+  away.eye = {0, 0, 2};
+  away.look_at = {0, 0, 3};
+  const SelectiveLevel a = refiner.refine_for_view(away);
+  EXPECT_EQ(a.splits_applied, 0);
+  EXPECT_GT(a.regions_outside, 0);
+  EXPECT_EQ(a.max_pixels, 0.0);
+  // Without culling, the same eye refines what lies behind it.
+  away.cull = false;
+  EXPECT_GT(refiner.refine_for_view(away).splits_applied, 0);
+  // From far away with a generous budget the base is enough; a budget of zero pixels refines all in view.
+  Viewpoint far_view = view;
+  far_view.eye = {0, 0, 1000};
+  far_view.look_at = {0, 0, 0};
+  far_view.pixel_error = 5;
+  EXPECT_EQ(refiner.refine_for_view(far_view).splits_applied, 0);
+  far_view.pixel_error = 0;
+  EXPECT_EQ(refiner.refine_for_view(far_view).splits_applied, pm.max_level());
+}
+
+TEST(SelectiveRefinement, BadViewsAndRequestsAreClearErrors) {
+  const ProgressiveMesh pm = build_progressive_mesh(test::bumpy_sphere(2, 0.05));
+  const SelectiveRefiner refiner(pm);
+  auto bad = [&](auto change, const std::string& words) {
+    Viewpoint v;
+    change(v);
+    try {
+      refiner.refine_for_view(v);
+      ADD_FAILURE() << "accepted: " << words;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  bad([](Viewpoint& v) { v.eye.x() = NAN; }, "must be finite");
+  bad([](Viewpoint& v) { v.look_at = v.eye; }, "must differ from the eye");
+  bad([](Viewpoint& v) { v.fov_degrees = 180; }, "field of view");
+  bad([](Viewpoint& v) { v.viewport_pixels = 0; }, "viewport height");
+  bad([](Viewpoint& v) { v.aspect = -1; }, "aspect ratio");
+  bad([](Viewpoint& v) { v.pixel_error = -1; }, "pixel error");
+  EXPECT_THROW(refiner.refine(std::vector<char>(3, 1)), Error);
+}
+
+}  // namespace
+}  // namespace lodkit
