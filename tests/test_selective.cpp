@@ -203,6 +203,44 @@ TEST(SelectiveRefinement, AViewerGetsDetailNearTheEyeOnly) {
   EXPECT_EQ(refiner.refine_for_view(far_view).splits_applied, pm.max_level());
 }
 
+TEST(SelectiveRefinement, TheMeasuredDeviationIsWhatTheViewerSees) {
+  // A flat grid down to its two triangles deviates nowhere: a view by deviation needs only the base.
+  {
+    ProgressiveOptions two_faces;
+    two_faces.base_faces = 2;
+    const ProgressiveMesh pm = build_progressive_mesh(make_grid({}), two_faces);
+    ASSERT_EQ(pm.base_faces, 2);
+    const SelectiveRefiner refiner(pm);
+    for (Index j = 0; j < pm.max_level(); ++j) EXPECT_LT(refiner.region_deviation(j), 1e-12);
+    Viewpoint view;
+    view.eye = {0.4, 0.4, 0.05};
+    view.pixel_error = 0.01;
+    const SelectiveLevel s = refiner.refine_for_view(view, LevelErrorKind::Measured);
+    EXPECT_EQ(s.splits_applied, 0);
+    EXPECT_LT(compare(extract_level(pm, pm.max_level()).mesh, s.extracted.mesh).hausdorff, 1e-12);
+    EXPECT_EQ(refiner.refine_for_view(view).splits_applied, pm.max_level());  // the bound sees edges
+  }
+  // On a bumpy sphere and a terrain, the distance compare() measures is close to the deviation, far
+  // below the bound, and the view by deviation is far coarser than the view by the bound.
+  for (const Mesh& input : {test::bumpy_sphere(4, 0.05), small_terrain(6)}) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    const SelectiveRefiner refiner(pm);
+    for (Index j = 0; j < pm.max_level(); ++j) ASSERT_LE(refiner.region_deviation(j), refiner.region_error(j));
+    const Mesh finest = extract_level(pm, pm.max_level(), VertexOrder::Stream).mesh;
+    Viewpoint view;
+    view.eye = pm.bounds.center() + Eigen::Vector3d(0.2, 0.3, 1.0).normalized() * 2 * bounding_radius(pm);
+    view.look_at = pm.bounds.center();
+    view.viewport_pixels = 200;
+    const SelectiveLevel by_bound = refiner.refine_for_view(view), by_deviation = refiner.refine_for_view(view, LevelErrorKind::Measured);
+    EXPECT_LT(3 * by_deviation.extracted.mesh.num_faces(), 2 * by_bound.extracted.mesh.num_faces());
+    EXPECT_LE(by_deviation.max_pixels, view.pixel_error);
+    const double measured = compare(finest, by_deviation.extracted.mesh).hausdorff;
+    EXPECT_LT(measured, 2 * by_deviation.deviation);
+    EXPECT_GT(measured, 0.5 * by_deviation.deviation);
+    EXPECT_LT(measured, by_deviation.error_bound);
+  }
+}
+
 TEST(SelectiveRefinement, BadViewsAndRequestsAreClearErrors) {
   const ProgressiveMesh pm = build_progressive_mesh(test::bumpy_sphere(2, 0.05));
   const SelectiveRefiner refiner(pm);

@@ -295,6 +295,8 @@ struct SelectiveLevel {
   Index splits_applied = 0;
   /// Hausdorff bound between this mesh and the finest level: the largest of its points' bounds.
   double error_bound = 0.0;
+  /// The largest of its points' measured deviations (SelectiveRefiner::region_deviation()).
+  double deviation = 0.0;
   /// By a view: the largest number of pixels a bound of a region in view projects to (at most the
   /// budget unless the finest level is reached there), and how many regions were left coarse outside it.
   double max_pixels = 0.0;
@@ -306,8 +308,12 @@ struct SelectiveLevel {
 /// that created or changed a face around its point by then (its dependencies), so the point's
 /// neighbourhood is exactly what the uniform level j had and the split leaves a valid mesh: any
 /// dependency-closed set of splits, applied in order, gives a manifold mesh with the input's topology.
-/// Each split's region is a ball around the input vertices its point stands for, and its error the
-/// bound |position - centre| + radius, as for level_error (conservative, loose sideways).
+/// Each split's region is a ball around the input vertices its point stands for. Its error is either
+/// the bound |position - centre| + radius, as for level_error (guaranteed, but loose sideways: about an
+/// edge's length even where the surface is flat), or its measured deviation: the distance between the
+/// point's faces before and after each split below it, at their corners and edge midpoints, added up
+/// the hierarchy (a distance to a surface is within that to a finer one plus theirs apart), never
+/// more than the bound. The deviation is what a viewer sees; it is measured, not proved.
 class SelectiveRefiner {
  public:
   /// Finds every split's dependencies and region (time and memory linear in the stream). `pm` must
@@ -321,14 +327,15 @@ class SelectiveRefiner {
   const Eigen::Vector3d& region_centre(Index split) const { return centre_[static_cast<std::size_t>(split)]; }
   double region_radius(Index split) const { return radius_[static_cast<std::size_t>(split)]; }
   double region_error(Index split) const { return error_[static_cast<std::size_t>(split)]; }
+  double region_deviation(Index split) const { return deviation_[static_cast<std::size_t>(split)]; }
 
   /// Applies the splits `wanted` marks (one entry per split) and every split they depend on, in order.
   /// \throw Error unless `wanted` has one entry per split.
   SelectiveLevel refine(std::vector<char> wanted) const;
-  /// Applies the splits whose region is in view with an error projecting to more than
-  /// view.pixel_error pixels (error * H / (2 d tan(fov / 2)), d the distance from the eye to the
-  /// region's ball), and their dependencies. \throw Error for a bad view.
-  SelectiveLevel refine_for_view(const Viewpoint& view) const;
+  /// Applies the splits whose region is in view with an error (the bound, or the measured deviation)
+  /// projecting to more than view.pixel_error pixels (error * H / (2 d tan(fov / 2)), d the distance
+  /// from the eye to the region's ball), and their dependencies. \throw Error for a bad view.
+  SelectiveLevel refine_for_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound) const;
 
  private:
   void close(std::vector<char>& wanted) const;  // adds every dependency
@@ -340,7 +347,7 @@ class SelectiveRefiner {
   std::vector<Index> dependency_start_, dependencies_;  // CSR: split j's are [start[j], start[j + 1])
   std::vector<Index> previous_at_point_;                // per split: the last earlier split of its point, or -1
   std::vector<Eigen::Vector3d> centre_;
-  std::vector<double> radius_, error_;
+  std::vector<double> radius_, error_, deviation_;
 };
 
 }  // namespace lodkit

@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 #include <numbers>
 
+#include "core/geometry.h"
 #include "progressive/split_state.h"
 
 namespace lodkit {
@@ -42,6 +43,18 @@ void erase_one(std::vector<Index>& list, Index f) {
     *it = list.back();
     list.pop_back();
   }
+}
+
+// The largest distance from `points` to the nearest of `triangles` (corner positions, three per triangle).
+double farthest_from(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& triangles) {
+  double farthest = 0;
+  for (const Eigen::Vector3d& x : points) {
+    double nearest = INFINITY;
+    for (std::size_t i = 0; i < triangles.size(); i += 3)
+      nearest = std::min(nearest, (detail::closest_point_on_triangle(x, triangles[i], triangles[i + 1], triangles[i + 2]) - x).squaredNorm());
+    if (std::isfinite(nearest)) farthest = std::max(farthest, nearest);
+  }
+  return std::sqrt(farthest);
 }
 
 void check_view(const Viewpoint& v) {
@@ -77,6 +90,9 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   dependency_start_.assign(n + 1, 0);
   previous_at_point_.assign(n, -1);
   std::vector<Index> found;
+  std::vector<Eigen::Vector3d> coarse_triangles, coarse_samples, fine_triangles, fine_samples;
+  std::vector<double> local(n);  // the Hausdorff distance between s's faces before and after, at samples
+  const double rounding = 1e-12 * bounding_radius(pm);
   for (std::size_t j = 0; j < n; ++j) {
     const VertexSplit& split = pm.splits[j];
     const std::size_t s = static_cast<std::size_t>(split.point);
@@ -90,6 +106,25 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
     dependency_start_[j + 1] = static_cast<Index>(dependencies_.size());
     previous_at_point_[j] = last_at_point[s];
     last_at_point[s] = static_cast<Index>(j);
+
+    // The coarse side of the split's local deviation: s's faces, and samples on them (s, its edges'
+    // midpoints, the faces' centroids).
+    auto star = [&](Index point, std::vector<Eigen::Vector3d>& triangles, std::vector<Eigen::Vector3d>& samples) {
+      const Eigen::Vector3d& at = state.positions[static_cast<std::size_t>(point)];
+      samples.push_back(at);
+      for (Index f : faces_at[static_cast<std::size_t>(point)]) {
+        Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 3; ++k) {
+          const Eigen::Vector3d& x = state.positions[static_cast<std::size_t>(point_of(state.corners[3 * static_cast<std::size_t>(f) + k]))];
+          triangles.push_back(x);
+          samples.push_back(0.5 * (x + at));
+          centroid += x / 3.0;
+        }
+        samples.push_back(centroid);
+      }
+    };
+    coarse_triangles.clear(), coarse_samples.clear(), fine_triangles.clear(), fine_samples.clear();
+    star(split.point, coarse_triangles, coarse_samples);
 
     // The split itself: corners that move to another point take their face along.
     const CornerChange* c = pm.corner_changes.data() + split.first_change;
@@ -106,6 +141,11 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
       add_face(f);
       stamp[static_cast<std::size_t>(f)] = static_cast<Index>(j);
     }
+    state.positions[s] = split.position;
+    star(split.point, fine_triangles, fine_samples);
+    star(pm.base_points + static_cast<Index>(j), fine_triangles, fine_samples);
+    local[j] = std::max(farthest_from(fine_samples, coarse_triangles), farthest_from(coarse_samples, fine_triangles));
+    if (local[j] <= rounding) local[j] = 0;  // a split within a plane (else an eye inside its ball refines it)
   }
 
   // Regions, from the finest level up: the ball of a point before split j holds its balls after the
@@ -124,6 +164,19 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
     centre_[j] = b.centre;
     radius_[j] = b.radius;
     error_[j] = (split.coarse_position - b.centre).norm() + b.radius;
+  }
+  // Deviations, from the finest level up: the split's own, plus the larger of what the two points
+  // after it deviate by (a distance to a surface within that of the finer one), never past the bound.
+  std::vector<Index> next_at_point(n, -1), first_at_point(points, -1);
+  for (std::size_t j = n; j-- > 0;) {
+    if (previous_at_point_[j] >= 0) next_at_point[static_cast<std::size_t>(previous_at_point_[j])] = static_cast<Index>(j);
+    first_at_point[static_cast<std::size_t>(pm.splits[j].point)] = static_cast<Index>(j);
+  }
+  deviation_.resize(n);
+  for (std::size_t j = n; j-- > 0;) {
+    auto below = [&](Index split) { return split >= 0 ? deviation_[static_cast<std::size_t>(split)] : 0.0; };
+    const double finer = std::max(below(next_at_point[j]), below(first_at_point[pm.base_points + j]));
+    deviation_[j] = std::min(error_[j], local[j] + finer);
   }
 }
 
@@ -171,7 +224,10 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied) 
     ++out.splits_applied;
   }
   // The error: at each point, the bound before its first split not applied.
-  for (Index j : frontier(applied)) out.error_bound = std::max(out.error_bound, error_[static_cast<std::size_t>(j)]);
+  for (Index j : frontier(applied)) {
+    out.error_bound = std::max(out.error_bound, error_[static_cast<std::size_t>(j)]);
+    out.deviation = std::max(out.deviation, deviation_[static_cast<std::size_t>(j)]);
+  }
 
   // The mesh, in stream order: faces by number, then the wedges they use by number.
   ExtractedLevel& e = out.extracted;
@@ -204,7 +260,7 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied) 
   return out;
 }
 
-SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view) const {
+SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErrorKind kind) const {
   check_view(view);
   const std::size_t n = pm_->splits.size();
   const double tan_half = std::tan(0.5 * view.fov_degrees * std::numbers::pi / 180.0);
@@ -219,10 +275,11 @@ SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view) const {
     const double along = v.dot(axis), across = (v - along * axis).norm();
     return across * cone_cos - along * cone_sin <= radius_[j];
   };
+  const std::vector<double>& error = kind == LevelErrorKind::Bound ? error_ : deviation_;
   auto pixels = [&](std::size_t j) {
     const double d = (centre_[j] - view.eye).norm() - radius_[j];
-    if (!(d > 0)) return error_[j] > 0 ? INFINITY : 0.0;
-    return error_[j] * view.viewport_pixels / (2.0 * d * tan_half);
+    if (!(d > 0)) return error[j] > 0 ? INFINITY : 0.0;
+    return error[j] * view.viewport_pixels / (2.0 * d * tan_half);
   };
   std::vector<char> wanted(n, 0);
   for (std::size_t j = 0; j < n; ++j) wanted[j] = in_view(j) && pixels(j) > view.pixel_error;
