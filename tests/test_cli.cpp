@@ -934,6 +934,44 @@ TEST(CliPm, BuildInfoExtractGeomorphEndToEnd) {
     EXPECT_NE(run(dir, cmd).out.find("Example"), std::string::npos) << cmd;
 }
 
+TEST(CliPm, ExtractRefinesSelectivelyForAnEye) {
+  // A terrain seen from above one corner: fine there, coarse far away, within the pixel budget.
+  test::ScratchDir dir("cli-pm-eye");
+  ASSERT_EQ(run(dir, "terrain -o t.ply --levels 6").status, 0);
+  ASSERT_EQ(run(dir, "pm build t.ply -o t.pm").status, 0);
+  const CliRun r = run(dir, "pm extract t.pm -o view.ply --json --pixel-error 2 --viewport 200 --eye -0.55,-0.55,0.1 --look-at 0.5,0.5,0");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  const Mesh view = read_mesh(dir / "view.ply");
+  EXPECT_EQ(j["faces"].get<Index>(), view.num_faces());
+  EXPECT_LE(j["max_pixels"].get<double>(), 2.0);
+  EXPECT_EQ(j["selected_by"], "measured deviation");
+  EXPECT_LT(view.num_faces(), j["uniform_level_faces"].get<Index>());
+  const MeshReport report = inspect(view);
+  EXPECT_TRUE(report.manifold);
+  EXPECT_EQ(report.euler_characteristic, inspect(read_mesh(dir / "t.ply")).euler_characteristic);
+  int near = 0, far = 0;
+  for (Index v = 0; v < view.num_vertices(); ++v) {
+    near += view.positions(v, 0) < -0.25 && view.positions(v, 1) < -0.25;
+    far += view.positions(v, 0) > 0.25 && view.positions(v, 1) > 0.25;
+  }
+  EXPECT_GT(near, 2 * far) << near << " near, " << far << " far";
+  // The guaranteed bound refines more; the text names what chose.
+  const CliRun certified = run(dir, "pm extract t.pm -o c.ply --pixel-error 2 --viewport 200 --eye -0.55,-0.55,0.1 --look-at 0.5,0.5,0 --certified");
+  ASSERT_EQ(certified.status, 0) << certified.err;
+  EXPECT_NE(certified.err.find("error bound projects"), std::string::npos) << certified.err;
+  EXPECT_GT(read_mesh(dir / "c.ply").num_faces(), view.num_faces());
+  // What does not combine with an eye is refused, naming why.
+  for (const char* bad : {"--eye 0,0,1", "--eye 0,0,1 --faces 10 --pixel-error 1", "--eye 0,0 --pixel-error 1",
+                          "--eye 0,0,1 --pixel-error 1 --input-order", "--look-at 0,0,0 --pixel-error 1 --distance 3",
+                          "--eye 0,0,1 --pixel-error 1 --distance 3", "--eye 0,0,1 --look-at 0,0,1 --pixel-error 1"}) {
+    const CliRun b = run(dir, std::string("pm extract t.pm -o x.ply ") + bad);
+    EXPECT_NE(b.status, 0) << bad;
+    EXPECT_FALSE(b.err.empty()) << bad;
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.ply")) << bad;
+  }
+}
+
 TEST(CliPm, ExtractFitsNormalsAndColoursWhenAsked) {
   // A level keeps each collapse's values; --fit-attributes fits them to the finest level's, as simplify
   // fits its output's: the same faces and positions, lower shading and colour errors, and in input order

@@ -33,6 +33,9 @@ struct PmCliOptions {
   int frames = 0;
   bool input_order = false, certified = false, fit_attributes = false;
   std::optional<std::string> prove_with;  // extract: the mesh the stream was built from
+  std::vector<double> eye, look_at;        // extract: selective refinement for this viewer
+  double aspect = 16.0 / 9.0;
+  bool no_cull = false;
   std::optional<Index> rows;
 };
 
@@ -214,10 +217,82 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
   return level;
 }
 
+Eigen::Vector3d point_option(const std::vector<double>& xyz, const char* name) {
+  if (xyz.size() != 3) throw Error(fmt::format("pm extract: {} takes three numbers: x,y,z", name));
+  return {xyz[0], xyz[1], xyz[2]};
+}
+
+// pm extract --eye: the splits this viewer needs, fine near the eye and coarse far away or out of view.
+int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std::vector<std::string>& inputs) {
+  if (!o.pixel_error) throw Error("pm extract: --eye needs a budget: --pixel-error");
+  if (o.faces || o.ratio || o.max_error) throw Error("pm extract: --eye selects by --pixel-error alone");
+  if (o.prove_with) throw Error("pm extract: --prove-with proves uniform levels; it does not combine with --eye");
+  if (o.input_order) throw Error("pm extract: a selectively refined mesh is in stream order; --input-order does not combine with --eye");
+  const auto start = std::chrono::steady_clock::now();
+  const PmReadResult r = read_pm_input(o.input);
+  warn(r, global);
+  const ProgressiveMesh& pm = r.pm;
+  Viewpoint view;
+  view.eye = point_option(o.eye, "--eye");
+  view.look_at = o.look_at.empty() ? pm.bounds.center() : point_option(o.look_at, "--look-at");
+  view.fov_degrees = o.fov;
+  view.viewport_pixels = o.viewport;
+  view.aspect = o.aspect;
+  view.pixel_error = *o.pixel_error;
+  view.cull = !o.no_cull;
+  const LevelErrorKind kind = o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;
+  const SelectiveRefiner refiner(pm);
+  SelectiveLevel s = refiner.refine_for_view(view, kind);
+  std::optional<AttributeFitReport> fit;
+  if (o.fit_attributes) fit = fit_attributes_to_input(extract_level(pm, pm.max_level(), VertexOrder::Input).mesh, s.extracted.mesh);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  write_output(s.extracted.mesh, o.output, o.format, WriteOptions{}, inputs);
+  // A uniform level within the same budget, for comparison: the one `--distance` would pick from here.
+  const ScreenSpaceBudget uniform{view.pixel_error, (pm.bounds.center() - view.eye).norm(), view.fov_degrees, view.viewport_pixels};
+  const Index uniform_faces = pm.num_faces(level_for_view(pm, uniform, selection_kind(o)));
+  const char* what = kind == LevelErrorKind::Bound ? "error bound" : "measured deviation";
+  if (o.json) {
+    nlohmann::json j{{"file", o.input},
+                     {"output", o.output},
+                     {"selective", true},
+                     {"eye", o.eye},
+                     {"look_at", {view.look_at.x(), view.look_at.y(), view.look_at.z()}},
+                     {"faces", s.extracted.mesh.num_faces()},
+                     {"vertices", s.extracted.mesh.num_vertices()},
+                     {"splits_applied", s.splits_applied},
+                     {"splits", pm.max_level()},
+                     {"selected_by", what},
+                     {"error_bound", s.error_bound},
+                     {"deviation", s.deviation},
+                     {"max_pixels", s.max_pixels},
+                     {"regions_out_of_view", s.regions_outside},
+                     {"uniform_level_faces", uniform_faces},
+                     {"bytes_read", r.bytes_read},
+                     {"seconds", seconds}};
+    if (fit) j["attribute_fit"] = attribute_fit_json(*fit);
+    fmt::print("{}\n", j.dump(2));
+  } else if (!global.quiet) {
+    fmt::print(stderr,
+               "pm extract: selective refinement for the eye at ({}, {}, {}): {} faces, {} vertices, {} of {} splits; {} "
+               "projects to at most {:.3g} px in view (budget {} px); deviation {:.6g}, bound {:.6g}{}; read {} bytes, "
+               "{:.1f} ms\n",
+               view.eye.x(), view.eye.y(), view.eye.z(), thousands(s.extracted.mesh.num_faces()),
+               thousands(s.extracted.mesh.num_vertices()), thousands(s.splits_applied), thousands(pm.max_level()), what,
+               s.max_pixels, view.pixel_error, s.deviation, s.error_bound,
+               s.regions_outside ? fmt::format(", {} regions out of view left coarse", thousands(s.regions_outside)) : "",
+               thousands(static_cast<long long>(r.bytes_read)), 1000 * seconds);
+    fmt::print(stderr, "  a uniform level within the same budget from this distance has {} faces\n", thousands(uniform_faces));
+    if (fit) print_attribute_fit(*fit);
+  }
+  return 0;
+}
+
 int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   const std::vector<std::string> inputs{o.input, o.prove_with.value_or("")};
   refuse_to_overwrite(o.output, inputs);  // before reading: fail fast
   refuse_json_beside_stdout(o.json, o.output);
+  if (!o.eye.empty()) return run_selective(o, global, inputs);
+  if (!o.look_at.empty()) throw Error("pm extract: --look-at needs --eye");
   const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
   if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
   if (o.prove_with && !o.max_error && !o.pixel_error)
@@ -337,6 +412,7 @@ Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
   lodkit pm info bunny.pm
   lodkit pm extract bunny.pm -o bunny_1k.ply --faces 1000
   lodkit pm extract bunny.pm -o near.ply --pixel-error 1 --distance 0.5 --fov 60 --viewport 1080
+  lodkit pm extract bunny.pm -o view.ply --pixel-error 1 --eye 0,0.1,0.3   # fine near the eye only
   lodkit pm geomorph bunny.pm --from 1000 --to 4000 --frames 30 -o morph.ply)");
 
   CLI::App* build = pm->add_subcommand("build", "Build a progressive mesh from a mesh and write it as a .pm stream");
@@ -391,6 +467,14 @@ Examples:
   extract->add_option("--distance", opt->distance, "Eye to bounding-sphere centre (with --pixel-error)")->capture_default_str();
   extract->add_option("--fov", opt->fov, "Vertical field of view, degrees")->check(in_range(0.01, 179.99))->capture_default_str();
   extract->add_option("--viewport", opt->viewport, "Viewport height, pixels")->check(kPositive)->capture_default_str();
+  extract->add_option("--eye", opt->eye,
+                      "Selective refinement: refine each region only as far as --pixel-error asks from this eye, x,y,z "
+                      "(reads the whole file)")
+      ->delimiter(',')->expected(3)->excludes("--distance");
+  extract->add_option("--look-at", opt->look_at, "With --eye: the point looked at, x,y,z (default: the bounding box centre)")
+      ->delimiter(',')->expected(3);
+  extract->add_option("--aspect", opt->aspect, "With --eye: viewport width over height")->check(kPositive)->capture_default_str();
+  extract->add_flag("--no-cull", opt->no_cull, "With --eye: refine what lies outside the view too");
   extract->add_flag("--input-order", opt->input_order, "Vertices and faces in input order (reads the whole file)");
   extract->add_flag("--certified", opt->certified, "Select by the collapses' own guaranteed bound (4-50x looser) even when the stream has measured errors");
   extract->add_option("--prove-with", opt->prove_with,
@@ -405,6 +489,9 @@ Examples:
   extract->footer(R"(pixels = error * viewport / (2 * d * tan(fov / 2)), d = distance - bounding radius.
 The error is the level's measured distance to the input when the stream was built with --measure
 (unless --certified), else its guaranteed bound, which is 4-50 times larger on the bunny.
+With --eye, each region of the mesh is refined on its own (selective refinement): d is the distance
+from the eye to the region, whose error is its measured deviation (its guaranteed bound with
+--certified); regions outside the view cone stay coarse unless --no-cull.
 Only the blocks the chosen level needs are read (all of them with --input-order, --prove-with or
 --fit-attributes).
 Examples:
@@ -412,7 +499,8 @@ Examples:
   lodkit pm extract bunny.pm -o half.obj --ratio 0.5 --input-order
   lodkit pm extract human.pm -o human_2k.ply --faces 2000 --fit-attributes   # shading as simplify's
   lodkit pm extract bunny.pm -o far.ply --pixel-error 0.5 --distance 2 --fov 45 --viewport 1440
-  lodkit pm extract bunny.pm -o seen.ply --pixel-error 1 --distance 2 --prove-with bunny.ply)");
+  lodkit pm extract bunny.pm -o seen.ply --pixel-error 1 --distance 2 --prove-with bunny.ply
+  lodkit pm extract terrain.pm -o view.ply --pixel-error 1 --eye -0.6,-0.6,0.1 --look-at 0.5,0.5,0)");
 
   CLI::App* morph = pm->add_subcommand("geomorph", "Blend between two levels (Hoppe's geomorphs)");
   morph->add_option("input", opt->input, "A .pm file, or - for stdin")->required();
