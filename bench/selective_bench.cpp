@@ -8,6 +8,8 @@
 #include <chrono>
 #include <fmt/format.h>
 
+#include "mesh_list_main.h"
+
 using namespace lodkit;
 
 namespace {
@@ -68,26 +70,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") {
-      fmt::print("{}", kUsage);
-      return 0;
-    }
-    if (a.starts_with("-")) {
-      fmt::print(stderr, "lodkit_bench_selective: unknown option {}\n{}", a, kUsage);
-      return 2;
-    }
-  }
-  if (argc < 2) {
-    fmt::print(stderr, "{}", kUsage);
-    return 2;
-  }
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "lodkit_bench_selective: {}\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return mesh_list_main(argc, argv, "lodkit_bench_selective", kUsage, run); }

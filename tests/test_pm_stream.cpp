@@ -13,11 +13,7 @@
 namespace lodkit {
 namespace {
 
-bool same_mesh(const Mesh& a, const Mesh& b) {
-  return a.positions == b.positions && a.triangles == b.triangles && a.attributes.normals == b.attributes.normals &&
-         a.attributes.uvs == b.attributes.uvs && a.attributes.colours == b.attributes.colours &&
-         a.attributes.face_colours == b.attributes.face_colours;
-}
+bool same_mesh(const Mesh& a, const Mesh& b) { return test::difference(a, b).empty(); }
 
 Mesh attributed_sphere() {
   UvSphereOptions o;

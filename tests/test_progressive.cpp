@@ -17,27 +17,7 @@
 namespace lodkit {
 namespace {
 
-/// Bit-for-bit equality of two meshes (positions, triangles, every attribute).
-void expect_identical(const Mesh& a, const Mesh& b, const std::string& what) {
-  ASSERT_EQ(a.num_vertices(), b.num_vertices()) << what;
-  ASSERT_EQ(a.num_faces(), b.num_faces()) << what;
-  EXPECT_TRUE(a.positions == b.positions) << what;
-  EXPECT_TRUE(a.triangles == b.triangles) << what;
-  EXPECT_TRUE(a.attributes.normals == b.attributes.normals) << what;
-  EXPECT_TRUE(a.attributes.uvs == b.attributes.uvs) << what;
-  EXPECT_TRUE(a.attributes.colours == b.attributes.colours) << what;
-  EXPECT_TRUE(a.attributes.face_colours == b.attributes.face_colours) << what;
-}
-
-Mesh seamed_sphere() {
-  UvSphereOptions o;
-  o.segments = 24;
-  o.rings = 12;
-  o.uvs = true;
-  Mesh m = make_uv_sphere(o);
-  m.attributes.normals = compute_vertex_normals(m);
-  return m;
-}
+void expect_identical(const Mesh& a, const Mesh& b, const std::string& what) { EXPECT_EQ(test::difference(a, b), "") << what; }
 
 /// A mesh with everything a real file can have besides clean triangles: an unreferenced vertex, an
 /// exact duplicate vertex used by one corner, a degenerate face, per-face colours.
@@ -57,7 +37,7 @@ Mesh awkward_mesh() {
 }
 
 TEST(ProgressiveMesh, FullRefinementReproducesTheInputExactly) {
-  for (const Mesh& input : {test::bumpy_sphere(3, 0.05), seamed_sphere(), make_grid({}), awkward_mesh()}) {
+  for (const Mesh& input : {test::bumpy_sphere(3, 0.05), test::seamed_uv_sphere(), make_grid({}), awkward_mesh()}) {
     const ProgressiveMesh pm = build_progressive_mesh(input);
     validate(pm);
     EXPECT_GT(pm.max_level(), 0);
@@ -80,7 +60,7 @@ TEST(ProgressiveMesh, EveryMethodBuildsAndRefinesExactly) {
 
 TEST(ProgressiveMesh, LevelsEqualSimplifyToTheSameFaceCount) {
   for (const SimplifyMethod method : {SimplifyMethod::Quadric, SimplifyMethod::Hoppe})
-    for (const Mesh& input : {test::bumpy_sphere(3, 0.05), seamed_sphere(), make_grid({})}) {
+    for (const Mesh& input : {test::bumpy_sphere(3, 0.05), test::seamed_uv_sphere(), make_grid({})}) {
       ProgressiveOptions o;
       o.simplify.method = method;
       const ProgressiveMesh pm = build_progressive_mesh(input, o);
@@ -108,7 +88,7 @@ TEST(ProgressiveMesh, LevelsEqualSimplifyWithAttributeAwareCosts) {
     o.simplify.method = method;
     o.simplify.attribute_weights.uvs = method == SimplifyMethod::Hoppe ? 0.1 : 1.0;
     o.simplify.attribute_weights.normals = method == SimplifyMethod::Hoppe ? 0.05 : 0.5;
-    const Mesh input = seamed_sphere();
+    const Mesh input = test::seamed_uv_sphere();
     const ProgressiveMesh pm = build_progressive_mesh(input, o);
     EXPECT_FALSE(pm.attribute_changes.empty());
     for (Index level : {Index(0), pm.max_level() / 3}) {
@@ -163,7 +143,7 @@ TEST(ProgressiveMesh, APixelBudgetIsTheDistanceThatProjectsToIt) {
 }
 
 TEST(ProgressiveMesh, RandomWalksAgreeWithDirectExtraction) {
-  const Mesh input = seamed_sphere();
+  const Mesh input = test::seamed_uv_sphere();
   ProgressiveOptions o;
   o.simplify.attribute_weights.uvs = 1.0;  // attribute changes must be undone too
   const ProgressiveMesh pm = build_progressive_mesh(input, o);
@@ -315,7 +295,7 @@ TEST(ProgressiveMesh, BaseFacesStopsEarly) {
 }
 
 TEST(ProgressiveMesh, AncestorsLeadToCoarserWedgesOfTheSamePointFamily) {
-  const ProgressiveMesh pm = build_progressive_mesh(seamed_sphere());
+  const ProgressiveMesh pm = build_progressive_mesh(test::seamed_uv_sphere());
   PMCursor cursor(pm);
   const Index fine = pm.max_level(), coarse = pm.max_level() / 4;
   for (Index w = 0; w < pm.num_wedges(fine); ++w) {
@@ -329,7 +309,7 @@ TEST(ProgressiveMesh, AncestorsLeadToCoarserWedgesOfTheSamePointFamily) {
 }
 
 TEST(Geomorph, EndpointsAreTheTwoLevels) {
-  const Mesh input = seamed_sphere();
+  const Mesh input = test::seamed_uv_sphere();
   const ProgressiveMesh pm = build_progressive_mesh(input);
   const Index from = pm.max_level() / 5, to = pm.max_level() / 2;
   const Geomorph g = make_geomorph(pm, from, to);

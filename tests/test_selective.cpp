@@ -17,26 +17,7 @@
 namespace lodkit {
 namespace {
 
-void expect_identical(const Mesh& a, const Mesh& b, const std::string& what) {
-  ASSERT_EQ(a.num_vertices(), b.num_vertices()) << what;
-  ASSERT_EQ(a.num_faces(), b.num_faces()) << what;
-  EXPECT_TRUE(a.positions == b.positions) << what;
-  EXPECT_TRUE(a.triangles == b.triangles) << what;
-  EXPECT_TRUE(a.attributes.normals == b.attributes.normals) << what;
-  EXPECT_TRUE(a.attributes.uvs == b.attributes.uvs) << what;
-  EXPECT_TRUE(a.attributes.colours == b.attributes.colours) << what;
-  EXPECT_TRUE(a.attributes.face_colours == b.attributes.face_colours) << what;
-}
-
-Mesh seamed_sphere() {
-  UvSphereOptions o;
-  o.segments = 24;
-  o.rings = 12;
-  o.uvs = true;
-  Mesh m = make_uv_sphere(o);
-  m.attributes.normals = compute_vertex_normals(m);
-  return m;
-}
+void expect_identical(const Mesh& a, const Mesh& b, const std::string& what) { EXPECT_EQ(test::difference(a, b), "") << what; }
 
 Mesh small_terrain(int levels = 5) {
   TerrainOptions o;
@@ -45,7 +26,7 @@ Mesh small_terrain(int levels = 5) {
   return generate_terrain(make_terrain_base(TerrainBase::Grid), o).mesh;
 }
 
-std::vector<Mesh> inputs() { return {test::bumpy_sphere(3, 0.05), seamed_sphere(), make_grid({}), small_terrain(4)}; }
+std::vector<Mesh> inputs() { return {test::bumpy_sphere(3, 0.05), test::seamed_uv_sphere(), make_grid({}), small_terrain(4)}; }
 
 TEST(SelectiveRefinement, NoSplitsGiveTheBaseAndEverySplitTheFinestLevel) {
   for (const Mesh& input : inputs()) {

@@ -10,6 +10,29 @@
 
 namespace lodkit::test {
 
+std::string difference(const Mesh& a, const Mesh& b) {
+  if (a.num_vertices() != b.num_vertices() || a.num_faces() != b.num_faces())
+    return "counts: " + std::to_string(a.num_vertices()) + " vertices, " + std::to_string(a.num_faces()) + " faces against " +
+           std::to_string(b.num_vertices()) + ", " + std::to_string(b.num_faces());
+  if (a.positions != b.positions) return "positions";
+  if (a.triangles != b.triangles) return "triangles";
+  if (a.attributes.normals != b.attributes.normals) return "normals";
+  if (a.attributes.uvs != b.attributes.uvs) return "uvs";
+  if (a.attributes.colours != b.attributes.colours) return "colours";
+  if (a.attributes.face_colours != b.attributes.face_colours) return "face colours";
+  return "";
+}
+
+Mesh seamed_uv_sphere() {
+  UvSphereOptions o;
+  o.segments = 24;
+  o.rings = 12;
+  o.uvs = true;
+  Mesh m = make_uv_sphere(o);
+  m.attributes.normals = compute_vertex_normals(m);
+  return m;
+}
+
 ScratchDir::ScratchDir(const std::string& tag) {
   std::random_device rd;
   path_ = std::filesystem::temp_directory_path() /

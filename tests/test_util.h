@@ -29,6 +29,13 @@ Mesh tetrahedron();
 /// One triangle.
 Mesh single_triangle();
 
+/// The first way two meshes differ (counts, positions, triangles, each attribute), or "" when they are
+/// identical bit for bit: EXPECT_EQ(test::difference(a, b), "").
+std::string difference(const Mesh& a, const Mesh& b);
+
+/// A UV sphere of 24 x 12 segments with UVs (a seam at u = 0 / 1) and smooth vertex normals.
+Mesh seamed_uv_sphere();
+
 /// An icosphere with deterministic radial noise of +-amplitude (relative): a bumpy closed surface.
 Mesh bumpy_sphere(int subdivisions, double amplitude, unsigned seed = 7);
 /// The mesh flat-shaded: three vertices of its own per face, each with the face's unit normal.

@@ -8,6 +8,23 @@
 
 namespace lodkit::detail {
 
+/// A ball: the progressive mesh's error bounds follow balls of input vertices up the collapses.
+struct Ball {
+  Eigen::Vector3d centre;
+  double radius;
+};
+
+/// The smallest ball holding both, padded by a relative epsilon so that rounding never leaves it a
+/// hair small (the bounds built on it stay conservative).
+inline Ball enclosing_ball(const Ball& a, const Ball& b) {
+  const double d = (b.centre - a.centre).norm();
+  if (d + b.radius <= a.radius) return a;
+  if (d + a.radius <= b.radius) return b;
+  const double r = 0.5 * (d + a.radius + b.radius);  // d > 0: equal centres put one ball inside the other
+  const Eigen::Vector3d c = a.centre + (b.centre - a.centre) * ((r - a.radius) / d);
+  return {c, r * (1 + 1e-12) + 1e-300};
+}
+
 /// Where the nearest point to x on segment a b lies, as t in [0, 1] along it (0 for a point-like segment).
 inline double segment_parameter(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const Eigen::Vector3d d = b - a;

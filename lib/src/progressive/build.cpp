@@ -6,26 +6,11 @@
 #include <algorithm>
 #include <fmt/format.h>
 
+#include "core/geometry.h"
 #include "core/topology.h"
 
 namespace lodkit {
 namespace {
-
-/// Smallest ball holding two balls.
-struct Ball {
-  Eigen::Vector3d centre;
-  double radius;
-};
-
-Ball merge(const Ball& a, const Ball& b) {
-  const double d = (b.centre - a.centre).norm();
-  if (d + b.radius <= a.radius) return a;
-  if (d + a.radius <= b.radius) return b;
-  const double r = 0.5 * (d + a.radius + b.radius);
-  // Rounding can leave the merged ball a hair small: pad by a relative epsilon to stay conservative.
-  const Eigen::Vector3d c = a.centre + (b.centre - a.centre) * ((r - a.radius) / d);
-  return {c, r * (1 + 1e-12) + 1e-300};
-}
 
 /// The wedge of the kept point that wedge w of the removed point merged into (-1 if w was unused).
 Index merged_into(const CollapseRecord& rec, Index w) {
@@ -83,7 +68,7 @@ ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptio
 
   // Forward replay: positions, attribute values and corners just before each collapse.
   std::vector<Eigen::Vector3d> position(static_cast<std::size_t>(num_engine_points));
-  std::vector<Ball> ball(static_cast<std::size_t>(num_engine_points));
+  std::vector<detail::Ball> ball(static_cast<std::size_t>(num_engine_points));
   for (Index w = 0; w < nv; ++w) position[point_of[w]] = mesh.positions.row(w).transpose();
   for (Index p = 0; p < num_engine_points; ++p) ball[p] = {position[p], 0.0};
   std::vector<double> value(dims * static_cast<std::size_t>(nv));
@@ -113,7 +98,7 @@ ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptio
       std::copy_n(rec.attributes_after.data() + dims * i, dims, v);
     }
     position[rec.kept] = rec.kept_after;
-    ball[rec.kept] = merge(ball[rec.kept], ball[rec.removed]);
+    ball[rec.kept] = detail::enclosing_ball(ball[rec.kept], ball[rec.removed]);
     bound = std::max(bound, (rec.kept_after - ball[rec.kept].centre).norm() + ball[rec.kept].radius);
     bound_after[c] = bound;
   }

@@ -73,12 +73,7 @@ ExtractedLevel PMCursor::extract(VertexOrder order) const {
   const Index extra_v = whole_input ? static_cast<Index>(pm.extra_vertex_input.size()) : 0;
   const Index extra_f = whole_input ? static_cast<Index>(pm.extra_face_input.size()) : 0;
   const Index nv_out = static_cast<Index>(wedges.size()) + extra_v, nf_out = nf + extra_f;
-  m.positions.resize(nv_out, 3);
-  m.triangles.resize(nf_out, 3);
-  if (pm.has_normals) m.attributes.normals.resize(nv_out, 3);
-  if (pm.has_uvs) m.attributes.uvs.resize(nv_out, 2);
-  if (pm.has_colours) m.attributes.colours.resize(nv_out, 4);
-  if (pm.has_face_colours) m.attributes.face_colours.resize(nf_out, 4);
+  detail::size_level_mesh(pm, nv_out, nf_out, m);
   out.vertex_wedge.assign(static_cast<std::size_t>(nv_out), -1);
   out.vertex_origin.assign(static_cast<std::size_t>(nv_out), -1);
 

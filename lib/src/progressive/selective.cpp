@@ -22,21 +22,6 @@
 namespace lodkit {
 namespace {
 
-struct Ball {
-  Eigen::Vector3d centre;
-  double radius;
-};
-
-// The smallest ball holding both.
-Ball enclosing(const Ball& a, const Ball& b) {
-  const double d = (b.centre - a.centre).norm();
-  if (d + b.radius <= a.radius) return a;
-  if (d + a.radius <= b.radius) return b;
-  const double radius = 0.5 * (d + a.radius + b.radius);
-  // d > 0 here: equal centres would have one ball inside the other.
-  return {a.centre + (radius - a.radius) / d * (b.centre - a.centre), radius};
-}
-
 // Removes one occurrence of f from the list, if there.
 void erase_one(std::vector<Index>& list, Index f) {
   if (const auto it = std::find(list.begin(), list.end(), f); it != list.end()) {
@@ -150,7 +135,7 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
 
   // Regions, from the finest level up: the ball of a point before split j holds its balls after the
   // split and the new point's.
-  std::vector<Ball> ball(points);
+  std::vector<detail::Ball> ball(points);
   for (std::size_t p = 0; p < points; ++p) ball[p] = {p < static_cast<std::size_t>(pm.base_points) ? pm.base_positions[p]
                                                                                                   : pm.splits[p - pm.base_points].new_position, 0.0};
   for (const VertexSplit& split : pm.splits) ball[static_cast<std::size_t>(split.point)].centre = split.position;
@@ -159,8 +144,8 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   error_.resize(n);
   for (std::size_t j = n; j-- > 0;) {
     const VertexSplit& split = pm.splits[j];
-    Ball& b = ball[static_cast<std::size_t>(split.point)];
-    b = enclosing(b, ball[static_cast<std::size_t>(pm.base_points) + j]);
+    detail::Ball& b = ball[static_cast<std::size_t>(split.point)];
+    b = detail::enclosing_ball(b, ball[static_cast<std::size_t>(pm.base_points) + j]);
     centre_[j] = b.centre;
     radius_[j] = b.radius;
     error_[j] = (split.coarse_position - b.centre).norm() + b.radius;
@@ -233,19 +218,15 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied) 
   ExtractedLevel& e = out.extracted;
   e.level = out.splits_applied;
   const std::size_t wedges = pm.wedge_point.size();
-  std::vector<Index> row_of(wedges, -1);
+  std::vector<char> used(wedges, 0);
   for (Index f : faces)
-    for (int k = 0; k < 3; ++k) row_of[static_cast<std::size_t>(state.corners[3 * static_cast<std::size_t>(f) + k])] = 0;
+    for (int k = 0; k < 3; ++k) used[static_cast<std::size_t>(state.corners[3 * static_cast<std::size_t>(f) + k])] = 1;
+  std::vector<Index> row_of(wedges, -1);
   for (std::size_t w = 0; w < wedges; ++w)
-    if (row_of[w] == 0) row_of[w] = static_cast<Index>(e.vertex_wedge.size()), e.vertex_wedge.push_back(static_cast<Index>(w));
+    if (used[w]) row_of[w] = static_cast<Index>(e.vertex_wedge.size()), e.vertex_wedge.push_back(static_cast<Index>(w));
   const Index nv = static_cast<Index>(e.vertex_wedge.size()), nf = static_cast<Index>(faces.size());
   Mesh& m = e.mesh;
-  m.positions.resize(nv, 3);
-  m.triangles.resize(nf, 3);
-  if (pm.has_normals) m.attributes.normals.resize(nv, 3);
-  if (pm.has_uvs) m.attributes.uvs.resize(nv, 2);
-  if (pm.has_colours) m.attributes.colours.resize(nv, 4);
-  if (pm.has_face_colours) m.attributes.face_colours.resize(nf, 4);
+  detail::size_level_mesh(pm, nv, nf, m);
   e.vertex_origin = e.vertex_wedge;
   for (Index row = 0; row < nv; ++row) {
     const Index w = e.vertex_wedge[static_cast<std::size_t>(row)];

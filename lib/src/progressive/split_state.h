@@ -47,6 +47,16 @@ inline void apply_split(const ProgressiveMesh& pm, Index split, bool fine, std::
   }
 }
 
+// Sizes `m` for a level of `vertices` and `faces`, with the attributes the stream carries.
+inline void size_level_mesh(const ProgressiveMesh& pm, Index vertices, Index faces, Mesh& m) {
+  m.positions.resize(vertices, 3);
+  m.triangles.resize(faces, 3);
+  if (pm.has_normals) m.attributes.normals.resize(vertices, 3);
+  if (pm.has_uvs) m.attributes.uvs.resize(vertices, 2);
+  if (pm.has_colours) m.attributes.colours.resize(vertices, 4);
+  if (pm.has_face_colours) m.attributes.face_colours.resize(faces, 4);
+}
+
 // Row `row` of `m` from a wedge at `position` with attribute values `a` (normals, UVs, colours).
 inline void put_wedge(const ProgressiveMesh& pm, const Eigen::Vector3d& position, const double* a, Mesh& m, Index row) {
   m.positions.row(row) = position.transpose();
