@@ -42,6 +42,8 @@ double farthest_from(const std::vector<Eigen::Vector3d>& points, const std::vect
   return std::sqrt(farthest);
 }
 
+constexpr std::size_t kMostSampledFaces = 64;
+
 void check_view(const Viewpoint& v) {
   auto fail = [](const std::string& what) { throw Error("selective refinement: " + what); };
   if (!v.eye.allFinite() || !v.look_at.allFinite()) fail("the eye and the point looked at must be finite");
@@ -109,7 +111,10 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
       }
     };
     coarse_triangles.clear(), coarse_samples.clear(), fine_triangles.clear(), fine_samples.clear();
-    star(split.point, coarse_triangles, coarse_samples);
+    // Samples against triangles cost the square of the point's valence: past kMostSampledFaces, the
+    // farthest any vertex moves instead (cheap, and no less than the distance between the stars).
+    const bool sampled = faces_at[s].size() <= kMostSampledFaces;
+    if (sampled) star(split.point, coarse_triangles, coarse_samples);
 
     // The split itself: corners that move to another point take their face along.
     const CornerChange* c = pm.corner_changes.data() + split.first_change;
@@ -127,9 +132,13 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
       stamp[static_cast<std::size_t>(f)] = static_cast<Index>(j);
     }
     state.positions[s] = split.position;
-    star(split.point, fine_triangles, fine_samples);
-    star(pm.base_points + static_cast<Index>(j), fine_triangles, fine_samples);
-    local[j] = std::max(farthest_from(fine_samples, coarse_triangles), farthest_from(coarse_samples, fine_triangles));
+    if (sampled) {
+      star(split.point, fine_triangles, fine_samples);
+      star(pm.base_points + static_cast<Index>(j), fine_triangles, fine_samples);
+      local[j] = std::max(farthest_from(fine_samples, coarse_triangles), farthest_from(coarse_samples, fine_triangles));
+    } else {
+      local[j] = std::max((split.position - split.coarse_position).norm(), (split.new_position - split.coarse_position).norm());
+    }
     if (local[j] <= rounding) local[j] = 0;  // a split within a plane (else an eye inside its ball refines it)
   }
 
