@@ -311,9 +311,10 @@ struct SelectiveLevel {
 /// Each split's region is a ball around the input vertices its point stands for. Its error is either
 /// the bound |position - centre| + radius, as for level_error (guaranteed, but loose sideways: about an
 /// edge's length even where the surface is flat), or its measured deviation: the distance between the
-/// point's faces before and after each split below it, at their corners and edge midpoints, added up
-/// the hierarchy (a distance to a surface is within that to a finer one plus theirs apart), never
-/// more than the bound. The deviation is what a viewer sees; it is measured, not proved.
+/// point's faces before and after each split below it, at their corners, edge midpoints and centroids
+/// (among more than 64 faces, the farthest its vertices move), added up the hierarchy (a distance to
+/// a surface is within that to a finer one plus theirs apart), never more than the bound. The
+/// deviation is what a viewer sees; it is measured, not proved.
 class SelectiveRefiner {
  public:
   /// Finds every split's dependencies and region (time and memory linear in the stream). `pm` must
