@@ -23,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (n > 0) (void)make_geomorph(pm, 0, n);
     const SelectiveRefiner refiner(pm);
     Viewpoint view;
-    view.look_at = pm.bounds.isEmpty() ? Eigen::Vector3d::Zero() : pm.bounds.center();
+    view.look_at = pm.bounds.isEmpty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(pm.bounds.center());
     view.eye = view.look_at + Eigen::Vector3d(0.3, 0.2, 1.0) * (1.0 + bounding_radius(pm));
     if (!view.eye.allFinite() || !((view.look_at - view.eye).norm() > 0)) return 0;
     std::vector<char> every_other(static_cast<std::size_t>(n), 0);
