@@ -57,15 +57,41 @@ void check_view(const Viewpoint& v) {
     fail(fmt::format("pixel error must be finite and not negative, got {}", v.pixel_error));
 }
 
-}  // namespace
+// What walking the uniform sequence finds: each split's dependencies (CSR), the last earlier split of
+// its point, and its local deviation.
+struct UniformWalk {
+  std::vector<Index> start, dependencies, previous_at_point;
+  std::vector<double> local;  // the distance between s's faces before and after the split, at samples
+};
 
-SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
-  validate(pm);
+// A point's faces (three corners each) and samples on them: the point, its edges' midpoints and the
+// faces' centroids.
+void star(const detail::SplitState& state, const ProgressiveMesh& pm, const std::vector<Index>& faces, Index point,
+          std::vector<Eigen::Vector3d>& triangles, std::vector<Eigen::Vector3d>& samples) {
+  const Eigen::Vector3d& at = state.positions[static_cast<std::size_t>(point)];
+  samples.push_back(at);
+  for (Index f : faces) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Index corner = state.corners[3 * static_cast<std::size_t>(f) + k];
+      const Eigen::Vector3d& x = state.positions[static_cast<std::size_t>(pm.wedge_point[static_cast<std::size_t>(corner)])];
+      triangles.push_back(x);
+      samples.push_back(0.5 * (x + at));
+      centroid += x / 3.0;
+    }
+    samples.push_back(centroid);
+  }
+}
+
+// Replays every split in order, keeping each point's faces and each face's last split.
+UniformWalk walk_uniform_sequence(const ProgressiveMesh& pm) {
   const std::size_t n = pm.splits.size();
   const std::size_t points = static_cast<std::size_t>(pm.num_points(pm.max_level()));
   auto point_of = [&](Index wedge) { return pm.wedge_point[static_cast<std::size_t>(wedge)]; };
-
-  // Walk the uniform sequence, keeping each point's faces and each face's last split.
+  UniformWalk walk;
+  walk.start.assign(n + 1, 0);
+  walk.previous_at_point.assign(n, -1);
+  walk.local.assign(n, 0.0);
   detail::SplitState state = detail::base_state(pm);
   std::vector<std::vector<Index>> faces_at(points);
   std::vector<Index> stamp(pm.face_corners.size(), -1), last_at_point(points, -1);
@@ -74,47 +100,29 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
       faces_at[static_cast<std::size_t>(point_of(state.corners[3 * static_cast<std::size_t>(f) + k]))].push_back(f);
   };
   for (Index f = 0; f < pm.base_faces; ++f) add_face(f);
-  dependency_start_.assign(n + 1, 0);
-  previous_at_point_.assign(n, -1);
   std::vector<Index> found;
   std::vector<Eigen::Vector3d> coarse_triangles, coarse_samples, fine_triangles, fine_samples;
-  std::vector<double> local(n);  // the Hausdorff distance between s's faces before and after, at samples
   const double rounding = 1e-12 * bounding_radius(pm);
   for (std::size_t j = 0; j < n; ++j) {
     const VertexSplit& split = pm.splits[j];
     const std::size_t s = static_cast<std::size_t>(split.point);
+    const Index t = pm.base_points + static_cast<Index>(j);
     found.clear();
     if (split.point >= pm.base_points) found.push_back(split.point - pm.base_points);  // s's own split
     for (Index f : faces_at[s])
       if (stamp[static_cast<std::size_t>(f)] >= 0) found.push_back(stamp[static_cast<std::size_t>(f)]);
     std::sort(found.begin(), found.end());
     found.erase(std::unique(found.begin(), found.end()), found.end());
-    dependencies_.insert(dependencies_.end(), found.begin(), found.end());
-    dependency_start_[j + 1] = static_cast<Index>(dependencies_.size());
-    previous_at_point_[j] = last_at_point[s];
+    walk.dependencies.insert(walk.dependencies.end(), found.begin(), found.end());
+    walk.start[j + 1] = static_cast<Index>(walk.dependencies.size());
+    walk.previous_at_point[j] = last_at_point[s];
     last_at_point[s] = static_cast<Index>(j);
 
-    // The coarse side of the split's local deviation: s's faces, and samples on them (s, its edges'
-    // midpoints, the faces' centroids).
-    auto star = [&](Index point, std::vector<Eigen::Vector3d>& triangles, std::vector<Eigen::Vector3d>& samples) {
-      const Eigen::Vector3d& at = state.positions[static_cast<std::size_t>(point)];
-      samples.push_back(at);
-      for (Index f : faces_at[static_cast<std::size_t>(point)]) {
-        Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-        for (int k = 0; k < 3; ++k) {
-          const Eigen::Vector3d& x = state.positions[static_cast<std::size_t>(point_of(state.corners[3 * static_cast<std::size_t>(f) + k]))];
-          triangles.push_back(x);
-          samples.push_back(0.5 * (x + at));
-          centroid += x / 3.0;
-        }
-        samples.push_back(centroid);
-      }
-    };
-    coarse_triangles.clear(), coarse_samples.clear(), fine_triangles.clear(), fine_samples.clear();
     // Samples against triangles cost the square of the point's valence: past kMostSampledFaces, the
     // farthest any vertex moves instead (cheap, and no less than the distance between the stars).
     const bool sampled = faces_at[s].size() <= kMostSampledFaces;
-    if (sampled) star(split.point, coarse_triangles, coarse_samples);
+    coarse_triangles.clear(), coarse_samples.clear(), fine_triangles.clear(), fine_samples.clear();
+    if (sampled) star(state, pm, faces_at[s], split.point, coarse_triangles, coarse_samples);
 
     // The split itself: corners that move to another point take their face along.
     const CornerChange* c = pm.corner_changes.data() + split.first_change;
@@ -132,15 +140,30 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
       stamp[static_cast<std::size_t>(f)] = static_cast<Index>(j);
     }
     state.positions[s] = split.position;
+
+    double& local = walk.local[j];
     if (sampled) {
-      star(split.point, fine_triangles, fine_samples);
-      star(pm.base_points + static_cast<Index>(j), fine_triangles, fine_samples);
-      local[j] = std::max(farthest_from(fine_samples, coarse_triangles), farthest_from(coarse_samples, fine_triangles));
+      star(state, pm, faces_at[s], split.point, fine_triangles, fine_samples);
+      star(state, pm, faces_at[static_cast<std::size_t>(t)], t, fine_triangles, fine_samples);
+      local = std::max(farthest_from(fine_samples, coarse_triangles), farthest_from(coarse_samples, fine_triangles));
     } else {
-      local[j] = std::max((split.position - split.coarse_position).norm(), (split.new_position - split.coarse_position).norm());
+      local = std::max((split.position - split.coarse_position).norm(), (split.new_position - split.coarse_position).norm());
     }
-    if (local[j] <= rounding) local[j] = 0;  // a split within a plane (else an eye inside its ball refines it)
+    if (local <= rounding) local = 0;  // a split within a plane (else an eye inside its ball refines it)
   }
+  return walk;
+}
+
+}  // namespace
+
+SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
+  validate(pm);
+  const std::size_t n = pm.splits.size();
+  const std::size_t points = static_cast<std::size_t>(pm.num_points(pm.max_level()));
+  UniformWalk walk = walk_uniform_sequence(pm);
+  dependency_start_ = std::move(walk.start);
+  dependencies_ = std::move(walk.dependencies);
+  previous_at_point_ = std::move(walk.previous_at_point);
 
   // Regions, from the finest level up: the ball of a point before split j holds its balls after the
   // split and the new point's.
@@ -170,7 +193,7 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   for (std::size_t j = n; j-- > 0;) {
     auto below = [&](Index split) { return split >= 0 ? deviation_[static_cast<std::size_t>(split)] : 0.0; };
     const double finer = std::max(below(next_at_point[j]), below(first_at_point[pm.base_points + j]));
-    deviation_[j] = std::min(error_[j], local[j] + finer);
+    deviation_[j] = std::min(error_[j], walk.local[j] + finer);
   }
 }
 
