@@ -961,6 +961,16 @@ TEST(CliPm, ExtractRefinesSelectivelyForAnEye) {
   ASSERT_EQ(certified.status, 0) << certified.err;
   EXPECT_NE(certified.err.find("error bound projects"), std::string::npos) << certified.err;
   EXPECT_GT(read_mesh(dir / "c.ply").num_faces(), view.num_faces());
+  // A closed sphere seen from one side: back faces culled, fewer faces, the regions counted.
+  ASSERT_EQ(run(dir, "generate icosphere -o ball.ply --subdivisions 4").status, 0);
+  ASSERT_EQ(run(dir, "pm build ball.ply -o ball.pm").status, 0);
+  const std::string ball_view = "pm extract ball.pm --json --pixel-error 1 --viewport 400 --eye 0,0,3 ";
+  const CliRun both = run(dir, ball_view + "-o both.ply"), front = run(dir, ball_view + "-o front.ply --cull-backfaces");
+  ASSERT_EQ(front.status, 0) << front.err;
+  const auto bj = nlohmann::json::parse(both.out), fj = nlohmann::json::parse(front.out);
+  EXPECT_EQ(bj["regions_facing_away"].get<Index>(), 0);
+  EXPECT_GT(fj["regions_facing_away"].get<Index>(), 0);
+  EXPECT_LT(fj["faces"].get<Index>(), bj["faces"].get<Index>());
   // What does not combine with an eye is refused, naming why.
   for (const char* bad : {"--eye 0,0,1", "--eye 0,0,1 --faces 10 --pixel-error 1", "--eye 0,0 --pixel-error 1",
                           "--eye 0,0,1 --pixel-error 1 --input-order", "--look-at 0,0,0 --pixel-error 1 --distance 3",

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <random>
 
+#include "core/geometry.h"
 #include "test_util.h"
 
 namespace lodkit {
@@ -225,6 +226,49 @@ TEST(SelectiveRefinement, TheMeasuredDeviationIsWhatTheViewerSees) {
     EXPECT_GT(measured, 0.5 * by_deviation.deviation);
     EXPECT_LT(measured, by_deviation.error_bound);
   }
+}
+
+TEST(SelectiveRefinement, NormalConesHoldBothCones) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> gauss;
+  std::uniform_real_distribution<double> angle(0.0, 1.5);
+  auto random_axis = [&] { return Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized(); };
+  for (int trial = 0; trial < 1000; ++trial) {
+    const detail::NormalCone a{random_axis(), angle(rng)}, b{random_axis(), angle(rng)};
+    const detail::NormalCone c = detail::enclosing_cone(a, b);
+    ASSERT_NEAR(c.axis.norm(), 1.0, 1e-12);
+    // Each input cone's axis and its farthest direction from c's axis lie within c.
+    for (const detail::NormalCone& in : {a, b}) {
+      EXPECT_LE(detail::direction_angle(c.axis, in.axis) + in.half_angle, c.half_angle + 1e-12) << trial;
+    }
+    EXPECT_LE(c.half_angle, std::numbers::pi);
+  }
+}
+
+TEST(SelectiveRefinement, RegionsFacingAwayStayCoarseWhenAsked) {
+  // A closed bumpy sphere seen from +z: culling back faces thins the far hemisphere only.
+  const ProgressiveMesh pm = build_progressive_mesh(test::bumpy_sphere(4, 0.03));
+  const SelectiveRefiner refiner(pm);
+  Viewpoint view;
+  view.eye = {0, 0, 3};
+  view.look_at = {0, 0, 0};
+  view.viewport_pixels = 400;
+  const SelectiveLevel all = refiner.refine_for_view(view, LevelErrorKind::Measured);
+  view.cull_backfaces = true;
+  const SelectiveLevel front = refiner.refine_for_view(view, LevelErrorKind::Measured);
+  EXPECT_EQ(all.regions_facing_away, 0);
+  EXPECT_GT(front.regions_facing_away, 0);
+  EXPECT_LT(front.extracted.mesh.num_faces(), all.extracted.mesh.num_faces());
+  EXPECT_EQ(inspect(front.extracted.mesh).euler_characteristic, 2);
+  auto count = [](const Mesh& m, double from, double to) {
+    int n = 0;
+    for (Index v = 0; v < m.num_vertices(); ++v) n += m.positions(v, 2) >= from && m.positions(v, 2) < to;
+    return n;
+  };
+  const Mesh &a = all.extracted.mesh, &f = front.extracted.mesh;
+  EXPECT_GE(count(f, 0.3, 2), count(a, 0.3, 2) * 95 / 100);  // the side facing the eye as before
+  EXPECT_LT(count(f, -2, -0.3), count(a, -2, -0.3) * 8 / 10) << count(f, -2, -0.3) << " of " << count(a, -2, -0.3)
+      << "; facing the eye " << count(f, 0.3, 2) << " of " << count(a, 0.3, 2);  // the far side coarser
 }
 
 TEST(SelectiveRefinement, BadViewsAndRequestsAreClearErrors) {

@@ -35,7 +35,7 @@ struct PmCliOptions {
   std::optional<std::string> prove_with;  // extract: the mesh the stream was built from
   std::vector<double> eye, look_at;        // extract: selective refinement for this viewer
   double aspect = 16.0 / 9.0;
-  bool no_cull = false;
+  bool no_cull = false, cull_backfaces = false;
   std::optional<Index> rows;
 };
 
@@ -240,6 +240,7 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
   view.aspect = o.aspect;
   view.pixel_error = *o.pixel_error;
   view.cull = !o.no_cull;
+  view.cull_backfaces = o.cull_backfaces;
   const LevelErrorKind kind = o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;
   const SelectiveRefiner refiner(pm);
   SelectiveLevel s = refiner.refine_for_view(view, kind);
@@ -266,6 +267,7 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
                      {"deviation", s.deviation},
                      {"max_pixels", s.max_pixels},
                      {"regions_out_of_view", s.regions_outside},
+                     {"regions_facing_away", s.regions_facing_away},
                      {"uniform_level_faces", uniform_faces},
                      {"bytes_read", r.bytes_read},
                      {"seconds", seconds}};
@@ -274,12 +276,13 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
   } else if (!global.quiet) {
     fmt::print(stderr,
                "pm extract: selective refinement for the eye at ({}, {}, {}): {} faces, {} vertices, {} of {} splits; {} "
-               "projects to at most {:.3g} px in view (budget {} px); deviation {:.6g}, bound {:.6g}{}; read {} bytes, "
+               "projects to at most {:.3g} px in view (budget {} px); deviation {:.6g}, bound {:.6g}{}{}; read {} bytes, "
                "{:.1f} ms\n",
                view.eye.x(), view.eye.y(), view.eye.z(), thousands(s.extracted.mesh.num_faces()),
                thousands(s.extracted.mesh.num_vertices()), thousands(s.splits_applied), thousands(pm.max_level()), what,
                s.max_pixels, view.pixel_error, s.deviation, s.error_bound,
                s.regions_outside ? fmt::format(", {} regions out of view left coarse", thousands(s.regions_outside)) : "",
+               s.regions_facing_away ? fmt::format(", {} facing away", thousands(s.regions_facing_away)) : "",
                thousands(static_cast<long long>(r.bytes_read)), 1000 * seconds);
     fmt::print(stderr, "  a uniform level within the same budget from this distance has {} faces\n", thousands(uniform_faces));
     if (fit) print_attribute_fit(*fit);
@@ -475,6 +478,8 @@ Examples:
       ->delimiter(',')->expected(3);
   extract->add_option("--aspect", opt->aspect, "With --eye: viewport width over height")->check(kPositive)->capture_default_str();
   extract->add_flag("--no-cull", opt->no_cull, "With --eye: refine what lies outside the view too");
+  extract->add_flag("--cull-backfaces", opt->cull_backfaces,
+                    "With --eye: leave regions facing away from the eye coarse (closed meshes: hidden behind the front)");
   extract->add_flag("--input-order", opt->input_order, "Vertices and faces in input order (reads the whole file)");
   extract->add_flag("--certified", opt->certified, "Select by the collapses' own guaranteed bound (4-50x looser) even when the stream has measured errors");
   extract->add_option("--prove-with", opt->prove_with,
@@ -491,7 +496,8 @@ The error is the level's measured distance to the input when the stream was buil
 (unless --certified), else its guaranteed bound, which is 4-50 times larger on the bunny.
 With --eye, each region of the mesh is refined on its own (selective refinement): d is the distance
 from the eye to the region, whose error is its measured deviation (its guaranteed bound with
---certified); regions outside the view cone stay coarse unless --no-cull.
+--certified); regions outside the view cone stay coarse unless --no-cull, and so do regions facing
+away with --cull-backfaces.
 Only the blocks the chosen level needs are read (all of them with --input-order, --prove-with or
 --fit-attributes).
 Examples:

@@ -287,6 +287,8 @@ struct Viewpoint {
   double aspect = 16.0 / 9.0;       ///< viewport width over height
   double pixel_error = 1.0;
   bool cull = true;  ///< leave what lies outside the view cone (around the frustum) coarse
+  /// Leave regions facing away from the eye coarse (for closed meshes: hidden behind the front).
+  bool cull_backfaces = false;
 };
 
 /// A selectively refined mesh and what it guarantees.
@@ -301,6 +303,7 @@ struct SelectiveLevel {
   /// budget unless the finest level is reached there), and how many regions were left coarse outside it.
   double max_pixels = 0.0;
   Index regions_outside = 0;
+  Index regions_facing_away = 0;  ///< left coarse because they face away (Viewpoint::cull_backfaces)
 };
 
 /// Selective refinement (Hoppe 1996, section 5): a mesh that applies only the splits a viewer needs,
@@ -349,6 +352,9 @@ class SelectiveRefiner {
   std::vector<Index> previous_at_point_;                // per split: the last earlier split of its point, or -1
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_, deviation_;
+  // Per split, the cone of the normals of the faces its region can show: axis and half-angle.
+  std::vector<Eigen::Vector3d> cone_axis_;
+  std::vector<double> cone_half_angle_;
 };
 
 }  // namespace lodkit

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace lodkit::detail {
 
@@ -23,6 +24,34 @@ inline Ball enclosing_ball(const Ball& a, const Ball& b) {
   const double r = 0.5 * (d + a.radius + b.radius);  // d > 0: equal centres put one ball inside the other
   const Eigen::Vector3d c = a.centre + (b.centre - a.centre) * ((r - a.radius) / d);
   return {c, r * (1 + 1e-12) + 1e-300};
+}
+
+/// The angle between two directions, accurate near 0 and pi, where acos of the cosine loses half the
+/// digits (the AABB tree's acos form pads its angles by a slack instead).
+inline double direction_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+/// A cone of directions: those within `half_angle` (radians, up to pi) of the unit `axis`; none when
+/// half_angle < 0.
+struct NormalCone {
+  Eigen::Vector3d axis;
+  double half_angle;
+};
+
+/// The narrowest cone around both (Hoppe's normal cones for view-dependent refinement).
+inline NormalCone enclosing_cone(const NormalCone& a, const NormalCone& b) {
+  if (a.half_angle < 0) return b;
+  if (b.half_angle < 0) return a;
+  const double between = direction_angle(a.axis, b.axis);
+  if (between + b.half_angle <= a.half_angle) return a;
+  if (between + a.half_angle <= b.half_angle) return b;
+  const double half = 0.5 * (between + a.half_angle + b.half_angle);
+  if (half >= std::numbers::pi || !(between > 0)) return {a.axis, std::min(half, std::numbers::pi)};
+  // Turn a's axis towards b's by half - a.half_angle, in their common plane.
+  const Eigen::Vector3d across = (b.axis - a.axis.dot(b.axis) * a.axis).normalized();
+  const double turn = half - a.half_angle;
+  return {(std::cos(turn) * a.axis + std::sin(turn) * across).normalized(), half * (1 + 1e-12)};
 }
 
 /// Where the nearest point to x on segment a b lies, as t in [0, 1] along it (0 for a point-like segment).

@@ -62,25 +62,45 @@ void check_view(const Viewpoint& v) {
 struct UniformWalk {
   std::vector<Index> start, dependencies, previous_at_point;
   std::vector<double> local;  // the distance between s's faces before and after the split, at samples
+  std::vector<detail::NormalCone> cone;  // the normals of s's faces before and after the split
 };
 
-// A point's faces (three corners each) and samples on them: the point, its edges' midpoints and the
-// faces' centroids.
+// A point's faces (three corners each) and, when asked, samples on them: the point, its edges'
+// midpoints and the faces' centroids.
 void star(const detail::SplitState& state, const ProgressiveMesh& pm, const std::vector<Index>& faces, Index point,
-          std::vector<Eigen::Vector3d>& triangles, std::vector<Eigen::Vector3d>& samples) {
+          std::vector<Eigen::Vector3d>& triangles, std::vector<Eigen::Vector3d>* samples) {
   const Eigen::Vector3d& at = state.positions[static_cast<std::size_t>(point)];
-  samples.push_back(at);
+  if (samples) samples->push_back(at);
   for (Index f : faces) {
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (int k = 0; k < 3; ++k) {
       const Index corner = state.corners[3 * static_cast<std::size_t>(f) + k];
       const Eigen::Vector3d& x = state.positions[static_cast<std::size_t>(pm.wedge_point[static_cast<std::size_t>(corner)])];
       triangles.push_back(x);
-      samples.push_back(0.5 * (x + at));
+      if (samples) samples->push_back(0.5 * (x + at));
       centroid += x / 3.0;
     }
-    samples.push_back(centroid);
+    if (samples) samples->push_back(centroid);
   }
+}
+
+// The cone of the faces' normals (unit axis, half-angle): around their mean direction, wide enough for
+// the farthest; the whole sphere when they cancel out. Faces without area have no normal.
+detail::NormalCone normal_cone(const std::vector<Eigen::Vector3d>& triangles) {
+  std::vector<Eigen::Vector3d> normals;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < triangles.size(); i += 3) {
+    const Eigen::Vector3d n = (triangles[i + 1] - triangles[i]).cross(triangles[i + 2] - triangles[i]);
+    if (!(n.norm() > 0)) continue;
+    normals.push_back(n.normalized());
+    sum += normals.back();
+  }
+  if (normals.empty()) return {Eigen::Vector3d::UnitZ(), -1.0};  // empty: any cone holds it
+  if (!(sum.norm() > 1e-9 * double(normals.size()))) return {Eigen::Vector3d::UnitZ(), std::numbers::pi};
+  const Eigen::Vector3d axis = sum.normalized();
+  double widest = 0;
+  for (const Eigen::Vector3d& n : normals) widest = std::max(widest, detail::direction_angle(n, axis));
+  return {axis, widest};
 }
 
 // Replays every split in order, keeping each point's faces and each face's last split.
@@ -92,6 +112,7 @@ UniformWalk walk_uniform_sequence(const ProgressiveMesh& pm) {
   walk.start.assign(n + 1, 0);
   walk.previous_at_point.assign(n, -1);
   walk.local.assign(n, 0.0);
+  walk.cone.resize(n);
   detail::SplitState state = detail::base_state(pm);
   std::vector<std::vector<Index>> faces_at(points);
   std::vector<Index> stamp(pm.face_corners.size(), -1), last_at_point(points, -1);
@@ -122,7 +143,7 @@ UniformWalk walk_uniform_sequence(const ProgressiveMesh& pm) {
     // farthest any vertex moves instead (cheap, and no less than the distance between the stars).
     const bool sampled = faces_at[s].size() <= kMostSampledFaces;
     coarse_triangles.clear(), coarse_samples.clear(), fine_triangles.clear(), fine_samples.clear();
-    if (sampled) star(state, pm, faces_at[s], split.point, coarse_triangles, coarse_samples);
+    star(state, pm, faces_at[s], split.point, coarse_triangles, sampled ? &coarse_samples : nullptr);
 
     // The split itself: corners that move to another point take their face along.
     const CornerChange* c = pm.corner_changes.data() + split.first_change;
@@ -141,10 +162,11 @@ UniformWalk walk_uniform_sequence(const ProgressiveMesh& pm) {
     }
     state.positions[s] = split.position;
 
+    star(state, pm, faces_at[s], split.point, fine_triangles, sampled ? &fine_samples : nullptr);
+    star(state, pm, faces_at[static_cast<std::size_t>(t)], t, fine_triangles, sampled ? &fine_samples : nullptr);
+    walk.cone[j] = detail::enclosing_cone(normal_cone(coarse_triangles), normal_cone(fine_triangles));
     double& local = walk.local[j];
     if (sampled) {
-      star(state, pm, faces_at[s], split.point, fine_triangles, fine_samples);
-      star(state, pm, faces_at[static_cast<std::size_t>(t)], t, fine_triangles, fine_samples);
       local = std::max(farthest_from(fine_samples, coarse_triangles), farthest_from(coarse_samples, fine_triangles));
     } else {
       local = std::max((split.position - split.coarse_position).norm(), (split.new_position - split.coarse_position).norm());
@@ -190,11 +212,21 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
     first_at_point[static_cast<std::size_t>(pm.splits[j].point)] = static_cast<Index>(j);
   }
   deviation_.resize(n);
+  std::vector<detail::NormalCone>& cone = walk.cone;
   for (std::size_t j = n; j-- > 0;) {
-    auto below = [&](Index split) { return split >= 0 ? deviation_[static_cast<std::size_t>(split)] : 0.0; };
-    const double finer = std::max(below(next_at_point[j]), below(first_at_point[pm.base_points + j]));
+    const Index after[2] = {next_at_point[j], first_at_point[pm.base_points + j]};
+    double finer = 0;
+    for (Index k : after)
+      if (k >= 0) {
+        finer = std::max(finer, deviation_[static_cast<std::size_t>(k)]);
+        // The normals of every face the region can show: its own split's and those below.
+        cone[j] = detail::enclosing_cone(cone[j], cone[static_cast<std::size_t>(k)]);
+      }
     deviation_[j] = std::min(error_[j], walk.local[j] + finer);
   }
+  cone_axis_.resize(n);
+  cone_half_angle_.resize(n);
+  for (std::size_t j = 0; j < n; ++j) cone_axis_[j] = cone[j].axis, cone_half_angle_[j] = cone[j].half_angle;
 }
 
 std::span<const Index> SelectiveRefiner::dependencies(Index split) const {
@@ -294,14 +326,28 @@ SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErr
     if (!(d > 0)) return error[j] > 0 ? INFINITY : 0.0;
     return error[j] * view.viewport_pixels / (2.0 * d * tan_half);
   };
+  // Facing away (Hoppe 1997, section 4.2): from every point of the ball, every normal of the cone
+  // points away from the eye. With u the eye to the centre and phi its angle to the cone's axis, the
+  // smallest (p - eye) . n is at least |u| cos(phi + half-angle) - radius.
+  auto facing_away = [&](std::size_t j) {
+    if (!view.cull_backfaces) return false;
+    const double half_angle = cone_half_angle_[j];
+    const Eigen::Vector3d u = centre_[j] - view.eye;
+    const double length = u.norm();
+    if (!(length > 0) || half_angle < 0) return false;
+    const double phi = detail::direction_angle(cone_axis_[j], u);
+    return phi + half_angle < 0.5 * std::numbers::pi && length * std::cos(phi + half_angle) > radius_[j];
+  };
   std::vector<char> wanted(n, 0);
-  for (std::size_t j = 0; j < n; ++j) wanted[j] = in_view(j) && pixels(j) > view.pixel_error;
+  for (std::size_t j = 0; j < n; ++j) wanted[j] = in_view(j) && !facing_away(j) && pixels(j) > view.pixel_error;
   close(wanted);
   SelectiveLevel out = apply_closed(wanted);
   // What the viewer sees: the regions left coarse, each at its point's first split not applied.
   for (Index j : frontier(wanted)) {
-    if (in_view(static_cast<std::size_t>(j))) out.max_pixels = std::max(out.max_pixels, pixels(static_cast<std::size_t>(j)));
-    else ++out.regions_outside;
+    const std::size_t i = static_cast<std::size_t>(j);
+    if (!in_view(i)) ++out.regions_outside;
+    else if (facing_away(i)) ++out.regions_facing_away;
+    else out.max_pixels = std::max(out.max_pixels, pixels(i));
   }
   return out;
 }
