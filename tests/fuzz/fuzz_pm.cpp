@@ -1,6 +1,6 @@
 // libFuzzer target: a .pm stream's bytes. Reading must return what survives or throw lodkit::Error;
-// the levels it returns must extract, geomorph and refine selectively (for a view, and for every
-// other split) without a crash or a sanitizer report, each vertex index in range.
+// the levels it returns must extract, geomorph and refine selectively (for a view culling back
+// faces, and for every other split) without a crash or a sanitizer report, each vertex index in range.
 #include <lodkit/error.h>
 #include <lodkit/pm_io.h>
 #include <lodkit/progressive.h>
@@ -26,6 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     view.look_at = pm.bounds.isEmpty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(pm.bounds.center());
     view.eye = view.look_at + Eigen::Vector3d(0.3, 0.2, 1.0) * (1.0 + bounding_radius(pm));
     if (!view.eye.allFinite() || !((view.look_at - view.eye).norm() > 0)) return 0;
+    view.cull_backfaces = true;
     std::vector<char> every_other(static_cast<std::size_t>(n), 0);
     for (std::size_t j = 0; j < every_other.size(); j += 2) every_other[j] = 1;
     for (const SelectiveLevel& s : {refiner.refine_for_view(view, LevelErrorKind::Measured), refiner.refine(every_other)}) {
