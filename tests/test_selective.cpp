@@ -5,6 +5,7 @@
 #include <lodkit/error.h>
 #include <lodkit/inspect.h>
 #include <lodkit/metrics.h>
+#include <lodkit/pm_io.h>
 #include <lodkit/primitives.h>
 #include <lodkit/progressive.h>
 #include <lodkit/terrain.h>
@@ -269,6 +270,30 @@ TEST(SelectiveRefinement, RegionsFacingAwayStayCoarseWhenAsked) {
   EXPECT_GE(count(f, 0.3, 2), count(a, 0.3, 2) * 95 / 100);  // the side facing the eye as before
   EXPECT_LT(count(f, -2, -0.3), count(a, -2, -0.3) * 8 / 10) << count(f, -2, -0.3) << " of " << count(a, -2, -0.3)
       << "; facing the eye " << count(f, 0.3, 2) << " of " << count(a, 0.3, 2);  // the far side coarser
+}
+
+TEST(SelectiveRefinement, AStreamReadInPartCountsItsLastLevelsError) {
+  // The first half of the splits, as a prefix read of the stream: every split applied is still the
+  // last level's error away from the input, and the bound says so.
+  const Mesh input = test::bumpy_sphere(3, 0.08);
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  PmReadOptions half;
+  half.max_faces = pm.num_faces(pm.max_level() / 2);
+  const ProgressiveMesh prefix = read_pm_from_memory(write_pm_to_memory(pm), "half.pm", half).pm;
+  ASSERT_LT(prefix.max_level(), pm.max_level());
+  const SelectiveRefiner refiner(prefix);
+  const SelectiveLevel all = refiner.refine(std::vector<char>(prefix.splits.size(), 1));
+  EXPECT_EQ(all.error_bound, prefix.level_error.back());
+  EXPECT_GT(all.error_bound, 0.0);
+  EXPECT_LE(compare(input, all.extracted.mesh).hausdorff, all.error_bound);
+  for (Index j = 0; j < prefix.max_level(); ++j) EXPECT_GE(refiner.region_error(j), prefix.level_error.back());
+  // A viewer close by needs more than the prefix holds, and is told so.
+  Viewpoint near;
+  near.eye = {0, 0, 1.5};
+  near.pixel_error = 0.5;
+  const SelectiveLevel seen = refiner.refine_for_view(near, LevelErrorKind::Bound);
+  EXPECT_EQ(seen.splits_applied, prefix.max_level());
+  EXPECT_GT(seen.max_pixels, near.pixel_error);
 }
 
 TEST(SelectiveRefinement, BadViewsAndRequestsAreClearErrors) {

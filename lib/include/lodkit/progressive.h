@@ -317,7 +317,8 @@ struct SelectiveLevel {
 /// point's faces before and after each split below it, at their corners, edge midpoints and centroids
 /// (among more than 64 faces, the farthest its vertices move), added up the hierarchy (a distance to
 /// a surface is within that to a finer one plus theirs apart), never more than the bound. The
-/// deviation is what a viewer sees; it is measured, not proved.
+/// deviation is what a viewer sees; it is measured, not proved. A stream read in part (a prefix, or a
+/// damaged stream's valid part) adds its last level's error from the input to both.
 class SelectiveRefiner {
  public:
   /// Finds every split's dependencies and region (time and memory linear in the stream). `pm` must
@@ -352,6 +353,7 @@ class SelectiveRefiner {
   std::vector<Index> previous_at_point_;                // per split: the last earlier split of its point, or -1
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_, deviation_;
+  double beyond_bound_ = 0, beyond_deviation_ = 0;  // the last level's bound and measured error (0 when it is the input)
   // Per split, the cone of the normals of the faces its region can show: axis and half-angle.
   std::vector<Eigen::Vector3d> cone_axis_;
   std::vector<double> cone_half_angle_;

@@ -182,6 +182,10 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   validate(pm);
   const std::size_t n = pm.splits.size();
   const std::size_t points = static_cast<std::size_t>(pm.num_points(pm.max_level()));
+  // A stream read in part ends above the input: what its last level is from the input adds to every
+  // region's error (a distance to the input is within that to the last level plus theirs apart).
+  beyond_bound_ = pm.level_error.back();
+  beyond_deviation_ = level_error(pm, pm.max_level(), LevelErrorKind::Measured);
   UniformWalk walk = walk_uniform_sequence(pm);
   dependency_start_ = std::move(walk.start);
   dependencies_ = std::move(walk.dependencies);
@@ -202,7 +206,7 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
     b = detail::enclosing_ball(b, ball[static_cast<std::size_t>(pm.base_points) + j]);
     centre_[j] = b.centre;
     radius_[j] = b.radius;
-    error_[j] = (split.coarse_position - b.centre).norm() + b.radius;
+    error_[j] = (split.coarse_position - b.centre).norm() + b.radius + beyond_bound_;
   }
   // Deviations, from the finest level up: the split's own, plus the larger of what the two points
   // after it deviate by (a distance to a surface within that of the finer one), never past the bound.
@@ -222,7 +226,7 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
         // The normals of every face the region can show: its own split's and those below.
         cone[j] = detail::enclosing_cone(cone[j], cone[static_cast<std::size_t>(k)]);
       }
-    deviation_[j] = std::min(error_[j], walk.local[j] + finer);
+    deviation_[j] = std::min(error_[j], walk.local[j] + finer + beyond_deviation_);
   }
   cone_axis_.resize(n);
   cone_half_angle_.resize(n);
@@ -266,6 +270,7 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied) 
   std::vector<Index> faces(static_cast<std::size_t>(pm.base_faces));
   for (Index f = 0; f < pm.base_faces; ++f) faces[static_cast<std::size_t>(f)] = f;
   SelectiveLevel out;
+  out.error_bound = beyond_bound_, out.deviation = beyond_deviation_;  // where every split is applied
   for (std::size_t j = 0; j < n; ++j) {
     if (!applied[j]) continue;
     detail::apply_split(pm, static_cast<Index>(j), true, state.positions, state.attributes, state.corners);
@@ -321,11 +326,12 @@ SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErr
     return across * cone_cos - along * cone_sin <= radius_[j];
   };
   const std::vector<double>& error = kind == LevelErrorKind::Bound ? error_ : deviation_;
-  auto pixels = [&](std::size_t j) {
-    const double d = (centre_[j] - view.eye).norm() - radius_[j];
-    if (!(d > 0)) return error[j] > 0 ? INFINITY : 0.0;
-    return error[j] * view.viewport_pixels / (2.0 * d * tan_half);
+  auto projected = [&](double e, const Eigen::Vector3d& centre, double radius) {
+    const double d = (centre - view.eye).norm() - radius;
+    if (!(d > 0)) return e > 0 ? INFINITY : 0.0;
+    return e * view.viewport_pixels / (2.0 * d * tan_half);
   };
+  auto pixels = [&](std::size_t j) { return projected(error[j], centre_[j], radius_[j]); };
   // Facing away (Hoppe 1997, section 4.2): from every point of the ball, every normal of the cone
   // points away from the eye. With u the eye to the centre and phi its angle to the cone's axis, the
   // smallest (p - eye) . n is at least |u| cos(phi + half-angle) - radius.
@@ -349,6 +355,9 @@ SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErr
     else if (facing_away(i)) ++out.regions_facing_away;
     else out.max_pixels = std::max(out.max_pixels, pixels(i));
   }
+  // A stream read in part: where every split is applied, its last level's error, at the nearest.
+  const double beyond = kind == LevelErrorKind::Bound ? beyond_bound_ : beyond_deviation_;
+  if (beyond > 0) out.max_pixels = std::max(out.max_pixels, projected(beyond, pm_->bounds.center(), bounding_radius(*pm_)));
   return out;
 }
 
