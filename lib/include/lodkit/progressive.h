@@ -346,7 +346,7 @@ class SelectiveRefiner {
   void close(std::vector<char>& wanted) const;  // adds every dependency
   /// Per point that exists, its first split not applied: the regions left coarse.
   std::vector<Index> frontier(const std::vector<char>& applied) const;
-  SelectiveLevel apply_closed(const std::vector<char>& applied) const;
+  SelectiveLevel apply_closed(const std::vector<char>& applied, const std::vector<Index>& coarse) const;
 
   const ProgressiveMesh* pm_;
   std::vector<Index> dependency_start_, dependencies_;  // CSR: split j's are [start[j], start[j + 1])

@@ -83,8 +83,7 @@ ExtractedLevel PMCursor::extract(VertexOrder order) const {
     row_of[static_cast<std::size_t>(w)] = row;
     out.vertex_wedge[static_cast<std::size_t>(row)] = w;
     out.vertex_origin[static_cast<std::size_t>(row)] = input_order ? pm.wedge_input[static_cast<std::size_t>(w)] : w;
-    detail::put_wedge(pm, positions_[static_cast<std::size_t>(pm.wedge_point[static_cast<std::size_t>(w)])],
-                      wedge_attributes(w), m, row);
+    detail::put_wedge(pm, positions_, attributes_, w, m, row);
   };
   if (whole_input) {
     // Input numbering exactly: wedges and extra vertices go to their input rows.

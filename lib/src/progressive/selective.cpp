@@ -44,17 +44,14 @@ double farthest_from(const std::vector<Eigen::Vector3d>& points, const std::vect
 
 constexpr std::size_t kMostSampledFaces = 64;
 
+// What a screen-space budget does not check itself (its field of view, viewport and pixel error are
+// checked where the budget is used).
 void check_view(const Viewpoint& v) {
   auto fail = [](const std::string& what) { throw Error("selective refinement: " + what); };
   if (!v.eye.allFinite() || !v.look_at.allFinite()) fail("the eye and the point looked at must be finite");
   if (v.cull && !((v.look_at - v.eye).norm() > 0)) fail("the point looked at must differ from the eye");
-  if (!(v.fov_degrees > 0 && v.fov_degrees < 180))
-    fail(fmt::format("field of view must be in (0, 180) degrees, got {}", v.fov_degrees));
-  if (!(v.viewport_pixels > 0) || !std::isfinite(v.viewport_pixels))
-    fail(fmt::format("viewport height must be positive, got {}", v.viewport_pixels));
+  if (!std::isfinite(v.viewport_pixels)) fail(fmt::format("viewport height must be positive, got {}", v.viewport_pixels));
   if (!(v.aspect > 0) || !std::isfinite(v.aspect)) fail(fmt::format("aspect ratio must be positive, got {}", v.aspect));
-  if (!(v.pixel_error >= 0) || !std::isfinite(v.pixel_error))
-    fail(fmt::format("pixel error must be finite and not negative, got {}", v.pixel_error));
 }
 
 // What walking the uniform sequence finds: each split's dependencies (CSR), the last earlier split of
@@ -260,10 +257,10 @@ SelectiveLevel SelectiveRefiner::refine(std::vector<char> wanted) const {
   if (wanted.size() != pm_->splits.size())
     throw Error(fmt::format("selective refinement: {} entries given for {} splits", wanted.size(), pm_->splits.size()));
   close(wanted);
-  return apply_closed(wanted);
+  return apply_closed(wanted, frontier(wanted));
 }
 
-SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied) const {
+SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied, const std::vector<Index>& coarse) const {
   const ProgressiveMesh& pm = *pm_;
   const std::size_t n = pm.splits.size();
   detail::SplitState state = detail::base_state(pm);
@@ -278,7 +275,7 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied) 
     ++out.splits_applied;
   }
   // The error: at each point, the bound before its first split not applied.
-  for (Index j : frontier(applied)) {
+  for (Index j : coarse) {
     out.error_bound = std::max(out.error_bound, error_[static_cast<std::size_t>(j)]);
     out.deviation = std::max(out.deviation, deviation_[static_cast<std::size_t>(j)]);
   }
@@ -299,8 +296,7 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied) 
   e.vertex_origin = e.vertex_wedge;
   for (Index row = 0; row < nv; ++row) {
     const Index w = e.vertex_wedge[static_cast<std::size_t>(row)];
-    detail::put_wedge(pm, state.positions[static_cast<std::size_t>(pm.wedge_point[static_cast<std::size_t>(w)])],
-                      state.attributes.data() + static_cast<std::size_t>(pm.attribute_dims) * static_cast<std::size_t>(w), m, row);
+    detail::put_wedge(pm, state.positions, state.attributes, w, m, row);
   }
   for (Index i = 0; i < nf; ++i) {
     const std::size_t f = static_cast<std::size_t>(faces[static_cast<std::size_t>(i)]);
@@ -313,6 +309,11 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied) 
 SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErrorKind kind) const {
   check_view(view);
   const std::size_t n = pm_->splits.size();
+  // Pixels per unit of error one unit from the eye (projected_pixels() checks the budget); a region's
+  // error projects to that over its distance (error * H / (2 d tan(fov / 2))).
+  const ScreenSpaceBudget budget{view.pixel_error, 1.0, view.fov_degrees, view.viewport_pixels};
+  (void)object_error_for_pixels(0.0, budget);  // checks the pixel error
+  const double per_unit = projected_pixels(1.0, 0.0, budget);
   const double tan_half = std::tan(0.5 * view.fov_degrees * std::numbers::pi / 180.0);
   // The cone around the frustum: its half-angle reaches the viewport's corners.
   const double cone = std::atan(tan_half * std::sqrt(1.0 + view.aspect * view.aspect));
@@ -326,12 +327,11 @@ SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErr
     return across * cone_cos - along * cone_sin <= radius_[j];
   };
   const std::vector<double>& error = kind == LevelErrorKind::Bound ? error_ : deviation_;
-  auto projected = [&](double e, const Eigen::Vector3d& centre, double radius) {
-    const double d = (centre - view.eye).norm() - radius;
-    if (!(d > 0)) return e > 0 ? INFINITY : 0.0;
-    return e * view.viewport_pixels / (2.0 * d * tan_half);
+  auto pixels = [&](std::size_t j) {
+    const double d = (centre_[j] - view.eye).norm() - radius_[j];
+    if (!(d > 0)) return error[j] > 0 ? INFINITY : 0.0;
+    return error[j] * per_unit / d;
   };
-  auto pixels = [&](std::size_t j) { return projected(error[j], centre_[j], radius_[j]); };
   // Facing away (Hoppe 1997, section 4.2): from every point of the ball, every normal of the cone
   // points away from the eye. With u the eye to the centre and phi its angle to the cone's axis, the
   // smallest (p - eye) . n is at least |u| cos(phi + half-angle) - radius.
@@ -347,9 +347,10 @@ SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErr
   std::vector<char> wanted(n, 0);
   for (std::size_t j = 0; j < n; ++j) wanted[j] = in_view(j) && !facing_away(j) && pixels(j) > view.pixel_error;
   close(wanted);
-  SelectiveLevel out = apply_closed(wanted);
+  const std::vector<Index> coarse = frontier(wanted);
+  SelectiveLevel out = apply_closed(wanted, coarse);
   // What the viewer sees: the regions left coarse, each at its point's first split not applied.
-  for (Index j : frontier(wanted)) {
+  for (Index j : coarse) {
     const std::size_t i = static_cast<std::size_t>(j);
     if (!in_view(i)) ++out.regions_outside;
     else if (facing_away(i)) ++out.regions_facing_away;
@@ -357,7 +358,10 @@ SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErr
   }
   // A stream read in part: where every split is applied, its last level's error, at the nearest.
   const double beyond = kind == LevelErrorKind::Bound ? beyond_bound_ : beyond_deviation_;
-  if (beyond > 0) out.max_pixels = std::max(out.max_pixels, projected(beyond, pm_->bounds.center(), bounding_radius(*pm_)));
+  if (beyond > 0) {
+    const ScreenSpaceBudget whole{view.pixel_error, (pm_->bounds.center() - view.eye).norm(), view.fov_degrees, view.viewport_pixels};
+    out.max_pixels = std::max(out.max_pixels, projected_pixels(beyond, bounding_radius(*pm_), whole));
+  }
   return out;
 }
 

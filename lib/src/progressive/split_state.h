@@ -57,9 +57,12 @@ inline void size_level_mesh(const ProgressiveMesh& pm, Index vertices, Index fac
   if (pm.has_face_colours) m.attributes.face_colours.resize(faces, 4);
 }
 
-// Row `row` of `m` from a wedge at `position` with attribute values `a` (normals, UVs, colours).
-inline void put_wedge(const ProgressiveMesh& pm, const Eigen::Vector3d& position, const double* a, Mesh& m, Index row) {
-  m.positions.row(row) = position.transpose();
+// Row `row` of `m` from wedge `w`: its point's position and its attribute values (normals, UVs,
+// colours) as `positions` and `attributes` hold them.
+inline void put_wedge(const ProgressiveMesh& pm, const std::vector<Eigen::Vector3d>& positions,
+                      const std::vector<double>& attributes, Index w, Mesh& m, Index row) {
+  m.positions.row(row) = positions[static_cast<std::size_t>(pm.wedge_point[static_cast<std::size_t>(w)])].transpose();
+  const double* a = attributes.data() + static_cast<std::size_t>(pm.attribute_dims) * static_cast<std::size_t>(w);
   int i = 0;
   if (pm.has_normals) for (int d = 0; d < 3; ++d) m.attributes.normals(row, d) = a[i++];
   if (pm.has_uvs) for (int d = 0; d < 2; ++d) m.attributes.uvs(row, d) = a[i++];
