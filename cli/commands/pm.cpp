@@ -217,10 +217,8 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
   return level;
 }
 
-Eigen::Vector3d point_option(const std::vector<double>& xyz, const char* name) {
-  if (xyz.size() != 3) throw Error(fmt::format("pm extract: {} takes three numbers: x,y,z", name));
-  return {xyz[0], xyz[1], xyz[2]};
-}
+// --eye and --look-at: CLI11 takes exactly three numbers.
+Eigen::Vector3d point_option(const std::vector<double>& xyz) { return {xyz[0], xyz[1], xyz[2]}; }
 
 // pm extract --eye: the splits this viewer needs, fine near the eye and coarse far away or out of view.
 int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std::vector<std::string>& inputs) {
@@ -233,8 +231,8 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
   warn(r, global);
   const ProgressiveMesh& pm = r.pm;
   Viewpoint view;
-  view.eye = point_option(o.eye, "--eye");
-  view.look_at = o.look_at.empty() ? pm.bounds.center() : point_option(o.look_at, "--look-at");
+  view.eye = point_option(o.eye);
+  view.look_at = o.look_at.empty() ? pm.bounds.center() : point_option(o.look_at);
   view.fov_degrees = o.fov;
   view.viewport_pixels = o.viewport;
   view.aspect = o.aspect;
