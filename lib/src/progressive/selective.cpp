@@ -35,7 +35,8 @@ double farthest_from(const std::vector<Eigen::Vector3d>& points, const std::vect
   double farthest = 0;
   for (const Eigen::Vector3d& x : points) {
     double nearest = INFINITY;
-    for (std::size_t i = 0; i < triangles.size(); i += 3)
+    // A point already within the farthest so far cannot raise it: stop looking.
+    for (std::size_t i = 0; i < triangles.size() && nearest > farthest; i += 3)
       nearest = std::min(nearest, (detail::closest_point_on_triangle(x, triangles[i], triangles[i + 1], triangles[i + 2]) - x).squaredNorm());
     if (std::isfinite(nearest)) farthest = std::max(farthest, nearest);
   }
@@ -63,19 +64,24 @@ struct UniformWalk {
 };
 
 // A point's faces (three corners each) and, when asked, samples on them: the point, its edges'
-// midpoints and the faces' centroids.
+// midpoints (each once) and the faces' centroids.
 void star(const detail::SplitState& state, const ProgressiveMesh& pm, const std::vector<Index>& faces, Index point,
           std::vector<Eigen::Vector3d>& triangles, std::vector<Eigen::Vector3d>* samples) {
   const Eigen::Vector3d& at = state.positions[static_cast<std::size_t>(point)];
   if (samples) samples->push_back(at);
+  std::vector<Index> ends;  // the points whose edge to `point` has its midpoint sampled
   for (Index f : faces) {
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (int k = 0; k < 3; ++k) {
       const Index corner = state.corners[3 * static_cast<std::size_t>(f) + k];
-      const Eigen::Vector3d& x = state.positions[static_cast<std::size_t>(pm.wedge_point[static_cast<std::size_t>(corner)])];
+      const Index end = pm.wedge_point[static_cast<std::size_t>(corner)];
+      const Eigen::Vector3d& x = state.positions[static_cast<std::size_t>(end)];
       triangles.push_back(x);
-      if (samples) samples->push_back(0.5 * (x + at));
       centroid += x / 3.0;
+      // Two faces share each edge, and the point's own corner has no edge.
+      if (!samples || end == point || std::find(ends.begin(), ends.end(), end) != ends.end()) continue;
+      ends.push_back(end);
+      samples->push_back(0.5 * (x + at));
     }
     if (samples) samples->push_back(centroid);
   }
