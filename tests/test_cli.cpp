@@ -980,6 +980,15 @@ TEST(CliPm, ExtractRefinesSelectivelyForAnEye) {
     EXPECT_FALSE(b.err.empty()) << bad;
     EXPECT_FALSE(std::filesystem::exists(dir / "x.ply")) << bad;
   }
+  // An eye at the centre looks nowhere unless told where: the message says how to go on.
+  const Mesh terrain = read_mesh(dir / "t.ply");
+  const Eigen::Vector3d mid = 0.5 * (terrain.positions.colwise().minCoeff() + terrain.positions.colwise().maxCoeff()).transpose();
+  const std::string centre = fmt::format("{},{},{}", mid.x(), mid.y(), mid.z());
+  const CliRun inside = run(dir, "pm extract t.pm -o x.ply --pixel-error 1 --eye " + centre);
+  EXPECT_EQ(inside.status, 1);
+  EXPECT_NE(inside.err.find("bounding box centre"), std::string::npos) << inside.err;
+  EXPECT_NE(inside.err.find("--look-at"), std::string::npos) << inside.err;
+  EXPECT_EQ(run(dir, "pm extract t.pm -o x.ply --pixel-error 1 --no-cull --eye " + centre).status, 0);
 }
 
 TEST(CliPm, ExtractFitsNormalsAndColoursWhenAsked) {

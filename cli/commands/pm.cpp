@@ -233,6 +233,10 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
   Viewpoint view;
   view.eye = point_option(o.eye);
   view.look_at = o.look_at.empty() ? pm.bounds.center() : point_option(o.look_at);
+  if (!o.no_cull && view.look_at == view.eye)
+    throw Error(fmt::format("pm extract: the eye ({}, {}, {}) is at the point looked at ({}); give a --look-at away from it, or "
+                            "--no-cull to refine in every direction", view.eye.x(), view.eye.y(), view.eye.z(),
+                            o.look_at.empty() ? "the bounding box centre, with no --look-at" : "--look-at"));
   view.fov_degrees = o.fov;
   view.viewport_pixels = o.viewport;
   view.aspect = o.aspect;
