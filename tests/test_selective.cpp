@@ -316,6 +316,83 @@ TEST(SelectiveRefinement, BadViewsAndRequestsAreClearErrors) {
   bad([](Viewpoint& v) { v.aspect = -1; }, "aspect ratio");
   bad([](Viewpoint& v) { v.pixel_error = -1; }, "pixel error");
   EXPECT_THROW(refiner.refine(std::vector<char>(3, 1)), Error);
+  SelectiveMesh mesh(refiner);
+  EXPECT_THROW(mesh.go_to(std::vector<char>(3, 1)), Error);
+  Viewpoint nowhere;
+  nowhere.look_at = nowhere.eye;
+  EXPECT_THROW(mesh.adapt(nowhere), Error);
+  EXPECT_EQ(std::count(mesh.applied().begin(), mesh.applied().end(), 1), 0);  // a refused view changes nothing
+}
+
+// The same selective level from a kept mesh as from the base: mesh, wedges and errors.
+void expect_same_level(const SelectiveLevel& kept, const SelectiveLevel& fresh, const std::string& what) {
+  expect_identical(kept.extracted.mesh, fresh.extracted.mesh, what);
+  EXPECT_EQ(kept.extracted.vertex_wedge, fresh.extracted.vertex_wedge) << what;
+  EXPECT_EQ(kept.splits_applied, fresh.splits_applied) << what;
+  EXPECT_EQ(kept.error_bound, fresh.error_bound) << what;
+  EXPECT_EQ(kept.deviation, fresh.deviation) << what;
+  EXPECT_EQ(kept.max_pixels, fresh.max_pixels) << what;
+  EXPECT_EQ(kept.regions_outside, fresh.regions_outside) << what;
+  EXPECT_EQ(kept.regions_facing_away, fresh.regions_facing_away) << what;
+}
+
+TEST(SelectiveMesh, EveryStateIsTheSetsMeshWhateverCameBefore) {
+  // Random closed sets one after another, sparse and dense, every split and none: each state equals
+  // refine() of its set from the base, bit for bit, and says how many splits it applied and undid.
+  std::mt19937 rng(23);
+  for (const Mesh& input : inputs()) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    const SelectiveRefiner refiner(pm);
+    const std::size_t n = pm.splits.size();
+    SelectiveMesh mesh(refiner);
+    std::vector<char> before(n, 0);
+    for (int step = 0; step < 24; ++step) {
+      std::vector<char> wanted(n, step % 8 == 7 ? 1 : 0);
+      if (step % 8 < 6) {
+        std::bernoulli_distribution pick(std::array{0.001, 0.01, 0.05, 0.2, 0.5, 0.02}[step % 8 < 6 ? step % 8 : 0]);
+        for (char& w : wanted) w = pick(rng);
+      }
+      const SelectiveLevel kept = mesh.go_to(wanted), fresh = refiner.refine(wanted);
+      const std::string what = fmt::format("step {}: {} of {} splits", step, fresh.splits_applied, n);
+      expect_same_level(kept, fresh, what);
+      Index refined = 0, coarsened = 0;
+      for (std::size_t j = 0; j < n; ++j) {
+        refined += !before[j] && mesh.applied()[j];
+        coarsened += before[j] && !mesh.applied()[j];
+      }
+      EXPECT_EQ(kept.splits_refined, refined) << what;
+      EXPECT_EQ(kept.splits_coarsened, coarsened) << what;
+      before = mesh.applied();
+    }
+  }
+}
+
+TEST(SelectiveMesh, FollowsAMovingViewerChangingOnlyWhatTheViewChanges) {
+  // An eye circling a bumpy sphere and moving in: each view kept is refine_for_view()'s, and a small
+  // step applies and undoes far fewer splits than the mesh holds.
+  const ProgressiveMesh pm = build_progressive_mesh(test::bumpy_sphere(4, 0.03));
+  const SelectiveRefiner refiner(pm);
+  SelectiveMesh mesh(refiner);
+  Index changed = 0, held = 0;
+  for (int frame = 0; frame < 40; ++frame) {
+    Viewpoint view;
+    const double angle = 0.05 * frame, distance = 3.0 - 0.03 * frame;
+    view.eye = {distance * std::sin(angle), 0.3, distance * std::cos(angle)};
+    view.look_at = {0, 0, 0};
+    view.viewport_pixels = 600;
+    // Three legs: by the deviation, then culling back faces, then by the bound.
+    view.cull_backfaces = frame >= 20 && frame < 30;
+    const LevelErrorKind kind = frame >= 30 ? LevelErrorKind::Bound : LevelErrorKind::Measured;
+    const SelectiveLevel kept = mesh.adapt(view, kind), fresh = refiner.refine_for_view(view, kind);
+    expect_same_level(kept, fresh, fmt::format("frame {}", frame));
+    EXPECT_EQ(mesh.applied(), refiner.splits_for_view(view, kind)) << "frame " << frame;
+    if (frame % 10 != 0) {  // within a leg
+      changed += kept.splits_refined + kept.splits_coarsened;
+      held += kept.splits_applied;
+    }
+  }
+  EXPECT_GT(held, 0);
+  EXPECT_LT(changed, held / 20) << changed << " splits changed, " << held << " held";
 }
 
 }  // namespace

@@ -304,6 +304,8 @@ struct SelectiveLevel {
   double max_pixels = 0.0;
   Index regions_outside = 0;
   Index regions_facing_away = 0;  ///< left coarse because they face away (Viewpoint::cull_backfaces)
+  /// By SelectiveMesh: the splits applied and undone to get here from its previous state.
+  Index splits_refined = 0, splits_coarsened = 0;
 };
 
 /// Selective refinement (Hoppe 1996, section 5): a mesh that applies only the splits a viewer needs,
@@ -341,12 +343,22 @@ class SelectiveRefiner {
   /// projecting to more than view.pixel_error pixels (error * H / (2 d tan(fov / 2)), d the distance
   /// from the eye to the region's ball), and their dependencies. \throw Error for a bad view.
   SelectiveLevel refine_for_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound) const;
+  /// The splits refine_for_view() applies for this view (one entry per split), without the mesh.
+  std::vector<char> splits_for_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound) const;
 
  private:
-  void close(std::vector<char>& wanted) const;  // adds every dependency
+  friend class SelectiveMesh;
+  struct ViewTest;  // a view's tests of a region (selective.cpp)
+  void check_size(const std::vector<char>& wanted) const;  // one entry per split
+  void close(std::vector<char>& wanted) const;             // adds every dependency
   /// Per point that exists, its first split not applied: the regions left coarse.
   std::vector<Index> frontier(const std::vector<char>& applied) const;
-  SelectiveLevel apply_closed(const std::vector<char>& applied, const std::vector<Index>& coarse) const;
+  SelectiveLevel apply_closed(const std::vector<char>& applied, const ViewTest* view) const;  // from the base
+  /// The mesh the state holds with the closed set `applied`, its errors, and what `view` (if any) sees.
+  SelectiveLevel level_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
+                          const std::vector<Index>& corners, const std::vector<char>& applied, const ViewTest* view) const;
+  /// What a view sees of the regions left coarse: pixels in view, regions out of it or facing away.
+  void report_view(const ViewTest& test, const std::vector<Index>& coarse, SelectiveLevel& out) const;
 
   const ProgressiveMesh* pm_;
   std::vector<Index> dependency_start_, dependencies_;  // CSR: split j's are [start[j], start[j + 1])
@@ -357,6 +369,34 @@ class SelectiveRefiner {
   // Per split, the cone of the normals of the faces its region can show: axis and half-angle.
   std::vector<Eigen::Vector3d> cone_axis_;
   std::vector<double> cone_half_angle_;
+};
+
+/// A selectively refined mesh kept from view to view (Hoppe 1997): moving to another set of splits
+/// undoes those no longer wanted, the last first, and applies the new ones in order, so a viewer who
+/// moves a little pays for the splits that change rather than for every split. Undoing is exact: a
+/// split left in a closed set without it depends on none of it. Each state is the mesh
+/// SelectiveRefiner::refine() gives for the same set, bit for bit, whatever the states before it.
+class SelectiveMesh {
+ public:
+  /// The base mesh. `refiner` (and its progressive mesh) must outlive this.
+  explicit SelectiveMesh(const SelectiveRefiner& refiner);
+
+  /// Moves to the splits `wanted` marks and their dependencies (refine()'s set).
+  /// \throw Error unless `wanted` has one entry per split.
+  SelectiveLevel go_to(std::vector<char> wanted);
+  /// Moves to the splits the view needs (refine_for_view()'s set and report).
+  SelectiveLevel adapt(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound);
+  /// Per split, whether it is applied now.
+  const std::vector<char>& applied() const { return applied_; }
+
+ private:
+  SelectiveLevel move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view);  // wanted is closed
+
+  const SelectiveRefiner* refiner_;
+  std::vector<Eigen::Vector3d> positions_;
+  std::vector<double> attributes_;
+  std::vector<Index> corners_;
+  std::vector<char> applied_;
 };
 
 }  // namespace lodkit

@@ -259,24 +259,36 @@ std::vector<Index> SelectiveRefiner::frontier(const std::vector<char>& applied) 
   return out;
 }
 
-SelectiveLevel SelectiveRefiner::refine(std::vector<char> wanted) const {
+void SelectiveRefiner::check_size(const std::vector<char>& wanted) const {
   if (wanted.size() != pm_->splits.size())
     throw Error(fmt::format("selective refinement: {} entries given for {} splits", wanted.size(), pm_->splits.size()));
-  close(wanted);
-  return apply_closed(wanted, frontier(wanted));
 }
 
-SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied, const std::vector<Index>& coarse) const {
+SelectiveLevel SelectiveRefiner::refine(std::vector<char> wanted) const {
+  check_size(wanted);
+  close(wanted);
+  return apply_closed(wanted, nullptr);
+}
+
+SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied, const ViewTest* view) const {
+  detail::SplitState state = detail::base_state(*pm_);
+  for (std::size_t j = 0; j < applied.size(); ++j)
+    if (applied[j]) detail::apply_split(*pm_, static_cast<Index>(j), true, state.positions, state.attributes, state.corners);
+  return level_of(state.positions, state.attributes, state.corners, applied, view);
+}
+
+SelectiveLevel SelectiveRefiner::level_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
+                                          const std::vector<Index>& corners, const std::vector<char>& applied,
+                                          const ViewTest* view) const {
   const ProgressiveMesh& pm = *pm_;
+  const std::vector<Index> coarse = frontier(applied);
   const std::size_t n = pm.splits.size();
-  detail::SplitState state = detail::base_state(pm);
   std::vector<Index> faces(static_cast<std::size_t>(pm.base_faces));
   for (Index f = 0; f < pm.base_faces; ++f) faces[static_cast<std::size_t>(f)] = f;
   SelectiveLevel out;
   out.error_bound = beyond_bound_, out.deviation = beyond_deviation_;  // where every split is applied
   for (std::size_t j = 0; j < n; ++j) {
     if (!applied[j]) continue;
-    detail::apply_split(pm, static_cast<Index>(j), true, state.positions, state.attributes, state.corners);
     for (Index f = pm.splits[j].first_face; f < pm.splits[j].first_face + pm.splits[j].num_faces; ++f) faces.push_back(f);
     ++out.splits_applied;
   }
@@ -292,7 +304,7 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied, 
   const std::size_t wedges = pm.wedge_point.size();
   std::vector<char> used(wedges, 0);
   for (Index f : faces)
-    for (int k = 0; k < 3; ++k) used[static_cast<std::size_t>(state.corners[3 * static_cast<std::size_t>(f) + k])] = 1;
+    for (int k = 0; k < 3; ++k) used[static_cast<std::size_t>(corners[3 * static_cast<std::size_t>(f) + k])] = 1;
   std::vector<Index> row_of(wedges, -1);
   for (std::size_t w = 0; w < wedges; ++w)
     if (used[w]) row_of[w] = static_cast<Index>(e.vertex_wedge.size()), e.vertex_wedge.push_back(static_cast<Index>(w));
@@ -302,73 +314,140 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied, 
   e.vertex_origin = e.vertex_wedge;
   for (Index row = 0; row < nv; ++row) {
     const Index w = e.vertex_wedge[static_cast<std::size_t>(row)];
-    detail::put_wedge(pm, state.positions, state.attributes, w, m, row);
+    detail::put_wedge(pm, positions, attributes, w, m, row);
   }
   for (Index i = 0; i < nf; ++i) {
     const std::size_t f = static_cast<std::size_t>(faces[static_cast<std::size_t>(i)]);
-    for (int k = 0; k < 3; ++k) m.triangles(i, k) = row_of[static_cast<std::size_t>(state.corners[3 * f + k])];
+    for (int k = 0; k < 3; ++k) m.triangles(i, k) = row_of[static_cast<std::size_t>(corners[3 * f + k])];
     if (pm.has_face_colours) m.attributes.face_colours.row(i) = pm.face_colours.row(static_cast<Index>(f));
   }
+  if (view) report_view(*view, coarse, out);
   return out;
 }
 
-SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErrorKind kind) const {
-  check_view(view);
-  const std::size_t n = pm_->splits.size();
-  // Pixels per unit of error one unit from the eye (projected_pixels() checks the budget); a region's
-  // error projects to that over its distance (error * H / (2 d tan(fov / 2))).
-  const ScreenSpaceBudget budget{view.pixel_error, 1.0, view.fov_degrees, view.viewport_pixels};
-  (void)object_error_for_pixels(0.0, budget);  // checks the pixel error
-  const double per_unit = projected_pixels(1.0, 0.0, budget);
-  const double tan_half = std::tan(0.5 * view.fov_degrees * std::numbers::pi / 180.0);
-  // The cone around the frustum: its half-angle reaches the viewport's corners.
-  const double cone = std::atan(tan_half * std::sqrt(1.0 + view.aspect * view.aspect));
-  const double cone_cos = std::cos(cone), cone_sin = std::sin(cone);
-  const Eigen::Vector3d axis = view.cull ? Eigen::Vector3d((view.look_at - view.eye).normalized()) : Eigen::Vector3d::Zero();
-  auto in_view = [&](std::size_t j) {
-    if (!view.cull) return true;
+// A view's tests of a region: in the view cone, facing away, and the pixels its error projects to.
+struct SelectiveRefiner::ViewTest {
+  ViewTest(const SelectiveRefiner& refiner, const Viewpoint& view, LevelErrorKind by)
+      : r(refiner), v(view), kind(by), error(by == LevelErrorKind::Bound ? refiner.error_ : refiner.deviation_) {
+    check_view(view);
+    // Pixels per unit of error one unit from the eye (projected_pixels() checks the budget); a region's
+    // error projects to that over its distance (error * H / (2 d tan(fov / 2))).
+    const ScreenSpaceBudget budget{view.pixel_error, 1.0, view.fov_degrees, view.viewport_pixels};
+    (void)object_error_for_pixels(0.0, budget);  // checks the pixel error
+    per_unit = projected_pixels(1.0, 0.0, budget);
+    const double tan_half = std::tan(0.5 * view.fov_degrees * std::numbers::pi / 180.0);
+    // The cone around the frustum: its half-angle reaches the viewport's corners.
+    const double cone = std::atan(tan_half * std::sqrt(1.0 + view.aspect * view.aspect));
+    cone_cos = std::cos(cone), cone_sin = std::sin(cone);
+    if (view.cull) axis = (view.look_at - view.eye).normalized();
+  }
+
+  bool in_view(std::size_t j) const {
+    if (!v.cull) return true;
     // p cos - a sin bounds the distance from the centre to the cone from below (exact beside its side).
-    const Eigen::Vector3d v = centre_[j] - view.eye;
-    const double along = v.dot(axis), across = (v - along * axis).norm();
-    return across * cone_cos - along * cone_sin <= radius_[j];
-  };
-  const std::vector<double>& error = kind == LevelErrorKind::Bound ? error_ : deviation_;
-  auto pixels = [&](std::size_t j) {
-    const double d = (centre_[j] - view.eye).norm() - radius_[j];
+    const Eigen::Vector3d d = r.centre_[j] - v.eye;
+    const double along = d.dot(axis), across = (d - along * axis).norm();
+    return across * cone_cos - along * cone_sin <= r.radius_[j];
+  }
+  double pixels(std::size_t j) const {
+    const double d = (r.centre_[j] - v.eye).norm() - r.radius_[j];
     if (!(d > 0)) return error[j] > 0 ? INFINITY : 0.0;
     return error[j] * per_unit / d;
-  };
+  }
   // Facing away (Hoppe 1997, section 4.2): from every point of the ball, every normal of the cone
   // points away from the eye. With u the eye to the centre and phi its angle to the cone's axis, the
   // smallest (p - eye) . n is at least |u| cos(phi + half-angle) - radius.
-  auto facing_away = [&](std::size_t j) {
-    if (!view.cull_backfaces) return false;
-    const double half_angle = cone_half_angle_[j];
-    const Eigen::Vector3d u = centre_[j] - view.eye;
+  bool facing_away(std::size_t j) const {
+    if (!v.cull_backfaces) return false;
+    const double half_angle = r.cone_half_angle_[j];
+    const Eigen::Vector3d u = r.centre_[j] - v.eye;
     const double length = u.norm();
     if (!(length > 0) || half_angle < 0) return false;
-    const double phi = detail::direction_angle(cone_axis_[j], u);
-    return phi + half_angle < 0.5 * std::numbers::pi && length * std::cos(phi + half_angle) > radius_[j];
-  };
-  std::vector<char> wanted(n, 0);
-  for (std::size_t j = 0; j < n; ++j) wanted[j] = in_view(j) && !facing_away(j) && pixels(j) > view.pixel_error;
-  close(wanted);
-  const std::vector<Index> coarse = frontier(wanted);
-  SelectiveLevel out = apply_closed(wanted, coarse);
+    const double phi = detail::direction_angle(r.cone_axis_[j], u);
+    return phi + half_angle < 0.5 * std::numbers::pi && length * std::cos(phi + half_angle) > r.radius_[j];
+  }
+  // The splits whose regions are in view, not facing away, with an error past the budget, and their
+  // dependencies.
+  std::vector<char> wanted() const {
+    std::vector<char> out(r.pm_->splits.size(), 0);
+    for (std::size_t j = 0; j < out.size(); ++j) out[j] = in_view(j) && !facing_away(j) && pixels(j) > v.pixel_error;
+    r.close(out);
+    return out;
+  }
+
+  const SelectiveRefiner& r;
+  const Viewpoint& v;
+  LevelErrorKind kind;
+  const std::vector<double>& error;
+  double per_unit = 0, cone_cos = 1, cone_sin = 0;
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+};
+
+std::vector<char> SelectiveRefiner::splits_for_view(const Viewpoint& view, LevelErrorKind kind) const {
+  return ViewTest(*this, view, kind).wanted();
+}
+
+void SelectiveRefiner::report_view(const ViewTest& test, const std::vector<Index>& coarse, SelectiveLevel& out) const {
   // What the viewer sees: the regions left coarse, each at its point's first split not applied.
   for (Index j : coarse) {
     const std::size_t i = static_cast<std::size_t>(j);
-    if (!in_view(i)) ++out.regions_outside;
-    else if (facing_away(i)) ++out.regions_facing_away;
-    else out.max_pixels = std::max(out.max_pixels, pixels(i));
+    if (!test.in_view(i)) ++out.regions_outside;
+    else if (test.facing_away(i)) ++out.regions_facing_away;
+    else out.max_pixels = std::max(out.max_pixels, test.pixels(i));
   }
   // A stream read in part: where every split is applied, its last level's error, at the nearest.
-  const double beyond = kind == LevelErrorKind::Bound ? beyond_bound_ : beyond_deviation_;
+  const Viewpoint& view = test.v;
+  const double beyond = test.kind == LevelErrorKind::Bound ? beyond_bound_ : beyond_deviation_;
   if (beyond > 0) {
     const ScreenSpaceBudget whole{view.pixel_error, (pm_->bounds.center() - view.eye).norm(), view.fov_degrees, view.viewport_pixels};
     out.max_pixels = std::max(out.max_pixels, projected_pixels(beyond, bounding_radius(*pm_), whole));
   }
+}
+
+SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErrorKind kind) const {
+  const ViewTest test(*this, view, kind);
+  return apply_closed(test.wanted(), &test);
+}
+
+SelectiveMesh::SelectiveMesh(const SelectiveRefiner& refiner) : refiner_(&refiner) {
+  detail::SplitState base = detail::base_state(*refiner.pm_);
+  positions_ = std::move(base.positions);
+  attributes_ = std::move(base.attributes);
+  corners_ = std::move(base.corners);
+  applied_.assign(refiner.pm_->splits.size(), 0);
+}
+
+SelectiveLevel SelectiveMesh::move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
+  // Undone from the last: a later split left applied depends on none of these (the set stays closed),
+  // so each one's faces hold just what it wrote. Then the new ones in order, as refine() applies them.
+  const ProgressiveMesh& pm = *refiner_->pm_;
+  Index refined = 0, coarsened = 0;
+  for (std::size_t j = applied_.size(); j-- > 0;)
+    if (applied_[j] && !wanted[j]) {
+      detail::apply_split(pm, static_cast<Index>(j), false, positions_, attributes_, corners_);
+      applied_[j] = 0;
+      ++coarsened;
+    }
+  for (std::size_t j = 0; j < applied_.size(); ++j)
+    if (!applied_[j] && wanted[j]) {
+      detail::apply_split(pm, static_cast<Index>(j), true, positions_, attributes_, corners_);
+      applied_[j] = 1;
+      ++refined;
+    }
+  SelectiveLevel out = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
+  out.splits_refined = refined, out.splits_coarsened = coarsened;
   return out;
+}
+
+SelectiveLevel SelectiveMesh::go_to(std::vector<char> wanted) {
+  refiner_->check_size(wanted);
+  refiner_->close(wanted);
+  return move_to(wanted, nullptr);
+}
+
+SelectiveLevel SelectiveMesh::adapt(const Viewpoint& view, LevelErrorKind kind) {
+  const SelectiveRefiner::ViewTest test(*refiner_, view, kind);
+  return move_to(test.wanted(), &test);
 }
 
 }  // namespace lodkit
