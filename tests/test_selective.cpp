@@ -324,6 +324,37 @@ TEST(SelectiveRefinement, BadViewsAndRequestsAreClearErrors) {
   EXPECT_EQ(std::count(mesh.applied().begin(), mesh.applied().end(), 1), 0);  // a refused view changes nothing
 }
 
+TEST(SelectiveRefinement, TheHierarchyFindsEveryRegionAViewNeeds) {
+  // splits_for_view() looks only where a region below a split can need refining; it must find what
+  // testing every region finds, from eyes near and far, inside and out, any way round.
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> coordinate(-3, 3), pixels(0.2, 8);
+  for (const Mesh& input : {test::bumpy_sphere(4, 0.04), small_terrain(5), test::seamed_uv_sphere()}) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    const SelectiveRefiner refiner(pm);
+    Index found = 0;
+    for (int trial = 0; trial < 60; ++trial) {
+      Viewpoint view;
+      view.eye = {coordinate(rng), coordinate(rng), coordinate(rng)};
+      view.eye *= trial % 4 == 0 ? 0.2 : 1.0;  // some inside
+      view.look_at = trial % 3 == 0 ? Eigen::Vector3d(coordinate(rng), coordinate(rng), coordinate(rng)) : pm.bounds.center();
+      view.pixel_error = pixels(rng);
+      view.viewport_pixels = 800;
+      view.cull = trial % 5 != 4;
+      view.cull_backfaces = trial % 2 == 1;
+      const LevelErrorKind kind = trial % 3 == 1 ? LevelErrorKind::Bound : LevelErrorKind::Measured;
+      std::vector<char> every = refiner.regions_needing_refinement(view, kind);
+      for (std::size_t j = every.size(); j-- > 0;)
+        if (every[j])
+          for (Index d : refiner.dependencies(static_cast<Index>(j))) every[static_cast<std::size_t>(d)] = 1;
+      const std::vector<char> walked = refiner.splits_for_view(view, kind);
+      ASSERT_EQ(walked, every) << "trial " << trial;
+      found += std::count(walked.begin(), walked.end(), 1);
+    }
+    EXPECT_GT(found, 0);
+  }
+}
+
 // The same selective level from a kept mesh as from the base: mesh, wedges and errors.
 void expect_same_level(const SelectiveLevel& kept, const SelectiveLevel& fresh, const std::string& what) {
   expect_identical(kept.extracted.mesh, fresh.extracted.mesh, what);

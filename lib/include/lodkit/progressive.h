@@ -343,8 +343,13 @@ class SelectiveRefiner {
   /// projecting to more than view.pixel_error pixels (error * H / (2 d tan(fov / 2)), d the distance
   /// from the eye to the region's ball), and their dependencies. \throw Error for a bad view.
   SelectiveLevel refine_for_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound) const;
-  /// The splits refine_for_view() applies for this view (one entry per split), without the mesh.
+  /// The splits refine_for_view() applies for this view (one entry per split), without the mesh: those
+  /// of regions_needing_refinement() and their dependencies, found down the hierarchy of splits only
+  /// where a region can need it (what lies below a split is held in one ball with its largest error).
   std::vector<char> splits_for_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound) const;
+  /// Per split, whether its own region needs refining for this view: in the view cone, not facing away,
+  /// with an error projecting past the budget. Every region is tested (time linear in the stream).
+  std::vector<char> regions_needing_refinement(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound) const;
 
  private:
   friend class SelectiveMesh;
@@ -353,6 +358,9 @@ class SelectiveRefiner {
   void close(std::vector<char>& wanted) const;             // adds every dependency
   /// Per point that exists, its first split not applied: the regions left coarse.
   std::vector<Index> frontier(const std::vector<char>& applied) const;
+  /// The splits just below split j in the hierarchy: the next split of its point and the first of the
+  /// point it makes (-1 where there is none).
+  std::array<Index, 2> below(Index split) const;
   SelectiveLevel apply_closed(const std::vector<char>& applied, const ViewTest* view) const;  // from the base
   /// The mesh the state holds with the closed set `applied`, its errors, and what `view` (if any) sees.
   SelectiveLevel level_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
@@ -362,13 +370,18 @@ class SelectiveRefiner {
 
   const ProgressiveMesh* pm_;
   std::vector<Index> dependency_start_, dependencies_;  // CSR: split j's are [start[j], start[j + 1])
-  std::vector<Index> previous_at_point_;                // per split: the last earlier split of its point, or -1
+  std::vector<Index> previous_at_point_, next_at_point_;  // per split: the split of its point before it, after it, or -1
+  std::vector<Index> first_at_point_;                    // per point: its first split, or -1
+  std::vector<Index> made_by_;                           // per split: the split that made its point, or -1
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_, deviation_;
   double beyond_bound_ = 0, beyond_deviation_ = 0;  // the last level's bound and measured error (0 when it is the input)
   // Per split, the cone of the normals of the faces its region can show: axis and half-angle.
   std::vector<Eigen::Vector3d> cone_axis_;
   std::vector<double> cone_half_angle_;
+  // Per split, what lies at or below it: a ball around its region's centre holding every region there,
+  // and the largest bound and deviation.
+  std::vector<double> reach_radius_, reach_bound_, reach_deviation_;
 };
 
 /// A selectively refined mesh kept from view to view (Hoppe 1997): moving to another set of splits

@@ -213,15 +213,18 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   }
   // Deviations, from the finest level up: the split's own, plus the larger of what the two points
   // after it deviate by (a distance to a surface within that of the finer one), never past the bound.
-  std::vector<Index> next_at_point(n, -1), first_at_point(points, -1);
+  made_by_.resize(n);
+  for (std::size_t j = 0; j < n; ++j) made_by_[j] = pm.splits[j].point >= pm.base_points ? pm.splits[j].point - pm.base_points : -1;
+  next_at_point_.assign(n, -1);
+  first_at_point_.assign(points, -1);
   for (std::size_t j = n; j-- > 0;) {
-    if (previous_at_point_[j] >= 0) next_at_point[static_cast<std::size_t>(previous_at_point_[j])] = static_cast<Index>(j);
-    first_at_point[static_cast<std::size_t>(pm.splits[j].point)] = static_cast<Index>(j);
+    if (previous_at_point_[j] >= 0) next_at_point_[static_cast<std::size_t>(previous_at_point_[j])] = static_cast<Index>(j);
+    first_at_point_[static_cast<std::size_t>(pm.splits[j].point)] = static_cast<Index>(j);
   }
   deviation_.resize(n);
   std::vector<detail::NormalCone>& cone = walk.cone;
   for (std::size_t j = n; j-- > 0;) {
-    const Index after[2] = {next_at_point[j], first_at_point[pm.base_points + j]};
+    const std::array<Index, 2> after = below(static_cast<Index>(j));
     double finer = 0;
     for (Index k : after)
       if (k >= 0) {
@@ -234,6 +237,28 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   cone_axis_.resize(n);
   cone_half_angle_.resize(n);
   for (std::size_t j = 0; j < n; ++j) cone_axis_[j] = cone[j].axis, cone_half_angle_[j] = cone[j].half_angle;
+
+  // What a view may find below each split, so that it need not look: a ball around the region's centre
+  // holding every region below (padded past rounding), and the largest errors there.
+  reach_radius_ = radius_;
+  reach_bound_ = error_;
+  reach_deviation_ = deviation_;
+  const double pad = 1e-9 * bounding_radius(pm);
+  for (std::size_t j = n; j-- > 0;) {
+    for (Index k : below(static_cast<Index>(j)))
+      if (k >= 0) {
+        const std::size_t i = static_cast<std::size_t>(k);
+        reach_radius_[j] = std::max(reach_radius_[j], (centre_[i] - centre_[j]).norm() + reach_radius_[i]);
+        reach_bound_[j] = std::max(reach_bound_[j], reach_bound_[i]);
+        reach_deviation_[j] = std::max(reach_deviation_[j], reach_deviation_[i]);
+      }
+    reach_radius_[j] += pad;
+  }
+}
+
+std::array<Index, 2> SelectiveRefiner::below(Index split) const {
+  const std::size_t j = static_cast<std::size_t>(split);
+  return {next_at_point_[j], first_at_point_[static_cast<std::size_t>(pm_->base_points) + j]};
 }
 
 std::span<const Index> SelectiveRefiner::dependencies(Index split) const {
@@ -249,12 +274,13 @@ void SelectiveRefiner::close(std::vector<char>& wanted) const {
 }
 
 std::vector<Index> SelectiveRefiner::frontier(const std::vector<char>& applied) const {
-  const ProgressiveMesh& pm = *pm_;
+  // Not applied, after its point was made and its point's split before it (small arrays, in order).
   std::vector<Index> out;
   for (std::size_t j = 0; j < applied.size(); ++j) {
-    const Index point = pm.splits[j].point, previous = previous_at_point_[j];
-    const bool exists = point < pm.base_points || applied[static_cast<std::size_t>(point - pm.base_points)];
-    if (!applied[j] && exists && (previous < 0 || applied[static_cast<std::size_t>(previous)])) out.push_back(static_cast<Index>(j));
+    const Index made_by = made_by_[j], previous = previous_at_point_[j];
+    if (!applied[j] && (made_by < 0 || applied[static_cast<std::size_t>(made_by)]) &&
+        (previous < 0 || applied[static_cast<std::size_t>(previous)]))
+      out.push_back(static_cast<Index>(j));
   }
   return out;
 }
@@ -328,7 +354,11 @@ SelectiveLevel SelectiveRefiner::level_of(const std::vector<Eigen::Vector3d>& po
 // A view's tests of a region: in the view cone, facing away, and the pixels its error projects to.
 struct SelectiveRefiner::ViewTest {
   ViewTest(const SelectiveRefiner& refiner, const Viewpoint& view, LevelErrorKind by)
-      : r(refiner), v(view), kind(by), error(by == LevelErrorKind::Bound ? refiner.error_ : refiner.deviation_) {
+      : r(refiner),
+        v(view),
+        kind(by),
+        error(by == LevelErrorKind::Bound ? refiner.error_ : refiner.deviation_),
+        reach_error(by == LevelErrorKind::Bound ? refiner.reach_bound_ : refiner.reach_deviation_) {
     check_view(view);
     // Pixels per unit of error one unit from the eye (projected_pixels() checks the budget); a region's
     // error projects to that over its distance (error * H / (2 d tan(fov / 2))).
@@ -342,35 +372,59 @@ struct SelectiveRefiner::ViewTest {
     if (view.cull) axis = (view.look_at - view.eye).normalized();
   }
 
-  bool in_view(std::size_t j) const {
-    if (!v.cull) return true;
-    // p cos - a sin bounds the distance from the centre to the cone from below (exact beside its side).
+  // Where split j's region lies from the eye: the distance to its centre, the lower bound on the
+  // distance to the view cone (p cos - a sin; exact beside its side), and its normals' angle.
+  struct Seen {
+    double distance, off_cone, phi;
+  };
+  Seen seen(std::size_t j) const {
     const Eigen::Vector3d d = r.centre_[j] - v.eye;
-    const double along = d.dot(axis), across = (d - along * axis).norm();
-    return across * cone_cos - along * cone_sin <= r.radius_[j];
+    Seen s{d.norm(), -INFINITY, 0.0};
+    if (v.cull) {
+      const double along = d.dot(axis), across = (d - along * axis).norm();
+      s.off_cone = across * cone_cos - along * cone_sin;
+    }
+    if (v.cull_backfaces) s.phi = detail::direction_angle(r.cone_axis_[j], d);
+    return s;
   }
-  double pixels(std::size_t j) const {
-    const double d = (r.centre_[j] - v.eye).norm() - r.radius_[j];
-    if (!(d > 0)) return error[j] > 0 ? INFINITY : 0.0;
-    return error[j] * per_unit / d;
-  }
+  // The tests of a ball of this radius around the centre, with the normals' cone and an error there.
+  // Each grows with the ball, so that of the ball holding every region below a split answers for all.
+  bool in_view(const Seen& s, double radius) const { return s.off_cone <= radius; }
   // Facing away (Hoppe 1997, section 4.2): from every point of the ball, every normal of the cone
   // points away from the eye. With u the eye to the centre and phi its angle to the cone's axis, the
-  // smallest (p - eye) . n is at least |u| cos(phi + half-angle) - radius.
-  bool facing_away(std::size_t j) const {
-    if (!v.cull_backfaces) return false;
-    const double half_angle = r.cone_half_angle_[j];
-    const Eigen::Vector3d u = r.centre_[j] - v.eye;
-    const double length = u.norm();
-    if (!(length > 0) || half_angle < 0) return false;
-    const double phi = detail::direction_angle(r.cone_axis_[j], u);
-    return phi + half_angle < 0.5 * std::numbers::pi && length * std::cos(phi + half_angle) > r.radius_[j];
+  // smallest (p - eye) . n is at least |u| cos(phi + half-angle) - radius. (A region's cone holds those
+  // below it.)
+  bool facing_away(const Seen& s, double radius, double half_angle) const {
+    return v.cull_backfaces && s.distance > 0 && half_angle >= 0 && s.phi + half_angle < 0.5 * std::numbers::pi &&
+           s.distance * std::cos(s.phi + half_angle) > radius;
   }
-  // The splits whose regions are in view, not facing away, with an error past the budget, and their
-  // dependencies.
+  double pixels(const Seen& s, double radius, double error_there) const {
+    const double d = s.distance - radius;
+    if (!(d > 0)) return error_there > 0 ? INFINITY : 0.0;
+    return error_there * per_unit / d;
+  }
+  bool needs(const Seen& s, double radius, double error_there, double half_angle) const {
+    return in_view(s, radius) && !facing_away(s, radius, half_angle) && pixels(s, radius, error_there) > v.pixel_error;
+  }
+  bool needs(std::size_t j) const { return needs(seen(j), r.radius_[j], error[j], r.cone_half_angle_[j]); }
+
+  // The splits whose regions need refining, and their dependencies: down the hierarchy from the base
+  // points, looking below a split only where a region there can need it (its reach, padded past
+  // rounding). In stream order, where what is looked at lies in memory.
   std::vector<char> wanted() const {
-    std::vector<char> out(r.pm_->splits.size(), 0);
-    for (std::size_t j = 0; j < out.size(); ++j) out[j] = in_view(j) && !facing_away(j) && pixels(j) > v.pixel_error;
+    const ProgressiveMesh& pm = *r.pm_;
+    const std::size_t n = pm.splits.size();
+    std::vector<char> out(n, 0), look(n, 0);
+    for (Index p = 0; p < pm.base_points; ++p)
+      if (const Index j = r.first_at_point_[static_cast<std::size_t>(p)]; j >= 0) look[static_cast<std::size_t>(j)] = 1;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (!look[j]) continue;
+      const Seen s = seen(j);
+      out[j] = needs(s, r.radius_[j], error[j], r.cone_half_angle_[j]);
+      if (!out[j] && !needs(s, r.reach_radius_[j], reach_error[j], r.cone_half_angle_[j] + 1e-9)) continue;
+      for (Index k : r.below(static_cast<Index>(j)))
+        if (k >= 0) look[static_cast<std::size_t>(k)] = 1;
+    }
     r.close(out);
     return out;
   }
@@ -379,6 +433,7 @@ struct SelectiveRefiner::ViewTest {
   const Viewpoint& v;
   LevelErrorKind kind;
   const std::vector<double>& error;
+  const std::vector<double>& reach_error;  // the largest at or below each split
   double per_unit = 0, cone_cos = 1, cone_sin = 0;
   Eigen::Vector3d axis = Eigen::Vector3d::Zero();
 };
@@ -387,13 +442,22 @@ std::vector<char> SelectiveRefiner::splits_for_view(const Viewpoint& view, Level
   return ViewTest(*this, view, kind).wanted();
 }
 
+std::vector<char> SelectiveRefiner::regions_needing_refinement(const Viewpoint& view, LevelErrorKind kind) const {
+  const ViewTest test(*this, view, kind);
+  std::vector<char> out(pm_->splits.size(), 0);
+  for (std::size_t j = 0; j < out.size(); ++j) out[j] = test.needs(j);
+  return out;
+}
+
 void SelectiveRefiner::report_view(const ViewTest& test, const std::vector<Index>& coarse, SelectiveLevel& out) const {
   // What the viewer sees: the regions left coarse, each at its point's first split not applied.
   for (Index j : coarse) {
     const std::size_t i = static_cast<std::size_t>(j);
-    if (!test.in_view(i)) ++out.regions_outside;
-    else if (test.facing_away(i)) ++out.regions_facing_away;
-    else out.max_pixels = std::max(out.max_pixels, test.pixels(i));
+    const ViewTest::Seen seen = test.seen(i);
+    const double radius = radius_[i];
+    if (!test.in_view(seen, radius)) ++out.regions_outside;
+    else if (test.facing_away(seen, radius, cone_half_angle_[i])) ++out.regions_facing_away;
+    else out.max_pixels = std::max(out.max_pixels, test.pixels(seen, radius, test.error[i]));
   }
   // A stream read in part: where every split is applied, its last level's error, at the nearest.
   const Viewpoint& view = test.v;
