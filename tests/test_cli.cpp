@@ -991,6 +991,54 @@ TEST(CliPm, ExtractRefinesSelectivelyForAnEye) {
   EXPECT_EQ(run(dir, "pm extract t.pm -o x.ply --pixel-error 1 --no-cull --eye " + centre).status, 0);
 }
 
+TEST(CliPm, ExtractRefinesSelectivelyAlongAnEyePath) {
+  // A camera path: each view is the mesh --eye gives for its eye, byte for byte, and the kept mesh
+  // applies and undoes only what changes (the counts add up from view to view).
+  test::ScratchDir dir("cli-pm-eye-path");
+  ASSERT_EQ(run(dir, "terrain -o t.ply --levels 6").status, 0);
+  ASSERT_EQ(run(dir, "pm build t.ply -o t.pm --measure").status, 0);
+  test::write_text(dir / "path.csv", "# eye x,y,z[,look-at x,y,z]\n-0.55,-0.55,0.1\n\n-0.5 -0.45 0.1\n"
+                                     "-0.45,-0.35,0.1\n0.9,0.9,0.3, 0.5,0.5,0\n");
+  const std::string common = "pm extract t.pm --pixel-error 2 --viewport 200 --look-at 0.5,0.5,0 ";
+  const CliRun r = run(dir, common + "-o view.ply --eye-path path.csv --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["views"].size(), 4u);
+  const char* eyes[] = {"-0.55,-0.55,0.1 --look-at 0.5,0.5,0", "-0.5,-0.45,0.1 --look-at 0.5,0.5,0",
+                        "-0.45,-0.35,0.1 --look-at 0.5,0.5,0", "0.9,0.9,0.3 --look-at 0.5,0.5,0"};
+  Index applied = 0;
+  for (int i = 0; i < 4; ++i) {
+    const auto& v = j["views"][static_cast<std::size_t>(i)];
+    const std::string name = fmt::format("view_{:03d}.ply", i);
+    EXPECT_TRUE(v["output"].get<std::string>().ends_with(name)) << v["output"];
+    ASSERT_EQ(run(dir, fmt::format("pm extract t.pm --pixel-error 2 --viewport 200 -o one.ply --eye {}", eyes[i])).status, 0);
+    EXPECT_EQ(test::read_bytes(dir / name), test::read_bytes(dir / "one.ply")) << name;
+    EXPECT_EQ(v["splits_applied"].get<Index>(), applied + v["splits_refined"].get<Index>() - v["splits_coarsened"].get<Index>());
+    applied = v["splits_applied"].get<Index>();
+    EXPECT_LE(v["max_pixels"].get<double>(), 2.0);
+  }
+  const auto& near_step = j["views"][1];  // a small step changes few splits
+  EXPECT_LT(4 * (near_step["splits_refined"].get<Index>() + near_step["splits_coarsened"].get<Index>()),
+            near_step["splits_applied"].get<Index>()) << near_step.dump();
+  EXPECT_GT(j["views"][3]["splits_coarsened"].get<Index>(), 0);  // the far corner: the near one coarsens
+  // Bad paths are refused by file and line, before any view is written.
+  for (const auto& [text, words] : std::vector<std::pair<std::string, std::string>>{
+           {"0,0,1\n1,2\n", "bad.csv:2: expected 3 numbers"},
+           {"0,0,nan\n", "bad.csv:1: 'nan' is not a finite number"},
+           {"0,0,1x\n", "bad.csv:1: '1x' is not a finite number"},
+           {"# nothing\n\n", "bad.csv: no eye in the file"},
+           {"0,0,1\n0.5,0.5,0\n", "bad.csv:2: the eye (0.5, 0.5, 0) is at the point looked at"}}) {
+    test::write_text(dir / "bad.csv", text);
+    const CliRun b = run(dir, common + "-o bad.ply --eye-path bad.csv");
+    EXPECT_EQ(b.status, 1) << text;
+    EXPECT_NE(b.err.find(words), std::string::npos) << b.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad_000.ply")) << text;
+  }
+  EXPECT_NE(run(dir, common + "-o bad.ply --eye-path missing.csv").err.find("missing.csv: cannot open"), std::string::npos);
+  EXPECT_NE(run(dir, common + "-o - --eye-path path.csv").status, 0);                    // files, not stdout
+  EXPECT_NE(run(dir, common + "-o bad.ply --eye-path path.csv --eye 0,0,1").status, 0);  // one or the other
+}
+
 TEST(CliPm, ExtractFitsNormalsAndColoursWhenAsked) {
   // A level keeps each collapse's values; --fit-attributes fits them to the finest level's, as simplify
   // fits its output's: the same faces and positions, lower shading and colour errors, and in input order

@@ -3,11 +3,16 @@
 #include <lodkit/pm_io.h>
 #include <lodkit/progressive.h>
 
+#include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
+#include <fstream>
+#include <limits>
 #include <memory>
+#include <sstream>
 
 #include "common.h"
 
@@ -34,6 +39,7 @@ struct PmCliOptions {
   bool input_order = false, certified = false, fit_attributes = false;
   std::optional<std::string> prove_with;  // extract: the mesh the stream was built from
   std::vector<double> eye, look_at;        // extract: selective refinement for this viewer
+  std::optional<std::string> eye_path;     // extract: ... for each viewer of this file
   double aspect = 16.0 / 9.0;
   bool no_cull = false, cull_backfaces = false;
   std::optional<Index> rows;
@@ -220,84 +226,167 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
 // --eye and --look-at: CLI11 takes exactly three numbers.
 Eigen::Vector3d point_option(const std::vector<double>& xyz) { return {xyz[0], xyz[1], xyz[2]}; }
 
-// pm extract --eye: the splits this viewer needs, fine near the eye and coarse far away or out of view.
+// out.ply -> out_000.ply, out_001.ply, ...: the frames of a geomorph or the views of a path.
+std::string numbered(const std::string& output, std::size_t i) {
+  const fs::path out(output);
+  return (out.parent_path() / fmt::format("{}_{:03d}{}", out.stem().string(), i, out.extension().string())).string();
+}
+
+// One viewer of --eye-path (or --eye): where from, where to (unset: --look-at, or the model's centre),
+// and the line it came from.
+struct PathView {
+  Eigen::Vector3d eye;
+  std::optional<Eigen::Vector3d> look_at;
+  int line = 0;
+};
+
+// An --eye-path file: a viewer per line, "x,y,z" or "x,y,z,lx,ly,lz" (the point looked at); blank lines
+// and lines starting with # are skipped; commas or spaces between numbers.
+std::vector<PathView> read_eye_path(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(fmt::format("{}: cannot open", path));
+  std::vector<PathView> views;
+  std::string text;
+  for (int line = 1; std::getline(in, text); ++line) {
+    std::replace(text.begin(), text.end(), ',', ' ');
+    std::istringstream fields(text);
+    std::vector<double> numbers;
+    std::string field;
+    while (fields >> field) {
+      if (numbers.empty() && field.starts_with('#')) break;
+      double x = 0;
+      const auto [end, error] = std::from_chars(field.data(), field.data() + field.size(), x);
+      if (error != std::errc() || end != field.data() + field.size() || !std::isfinite(x))
+        throw Error(fmt::format("{}:{}: '{}' is not a finite number", path, line, field));
+      numbers.push_back(x);
+    }
+    if (numbers.empty()) continue;
+    if (numbers.size() != 3 && numbers.size() != 6)
+      throw Error(fmt::format("{}:{}: expected 3 numbers (the eye) or 6 (and the point looked at), got {}", path, line, numbers.size()));
+    PathView v{{numbers[0], numbers[1], numbers[2]}, std::nullopt, line};
+    if (numbers.size() == 6) v.look_at = Eigen::Vector3d(numbers[3], numbers[4], numbers[5]);
+    views.push_back(v);
+  }
+  if (views.empty()) throw Error(fmt::format("{}: no eye in the file", path));
+  return views;
+}
+
+// pm extract --eye / --eye-path: the splits each viewer needs, fine near the eye and coarse far away or
+// out of view. Along a path one mesh is kept from view to view, so each view applies and undoes only
+// the splits that change.
 int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std::vector<std::string>& inputs) {
-  if (!o.pixel_error) throw Error("pm extract: --eye needs a budget: --pixel-error");
+  const bool path = o.eye_path.has_value();
+  if (!o.pixel_error) throw Error(fmt::format("pm extract: {} needs a budget: --pixel-error", path ? "--eye-path" : "--eye"));
   if (o.faces || o.ratio || o.max_error) throw Error("pm extract: --eye selects by --pixel-error alone");
   if (o.prove_with) throw Error("pm extract: --prove-with proves uniform levels; it does not combine with --eye");
   if (o.input_order) throw Error("pm extract: a selectively refined mesh is in stream order; --input-order does not combine with --eye");
+  if (path && !o.eye.empty()) throw Error("pm extract: give --eye or --eye-path, not both");
+  if (path && o.output == "-") throw Error("pm extract: --eye-path writes files OUT_000 ...: give OUT a file name");
   const auto start = std::chrono::steady_clock::now();
+  const std::vector<PathView> lines = path ? read_eye_path(*o.eye_path) : std::vector<PathView>{{point_option(o.eye), {}, 0}};
   const PmReadResult r = read_pm_input(o.input);
   warn(r, global);
   const ProgressiveMesh& pm = r.pm;
-  Viewpoint view;
-  view.eye = point_option(o.eye);
-  view.look_at = o.look_at.empty() ? pm.bounds.center() : point_option(o.look_at);
-  if (!o.no_cull && view.look_at == view.eye)
-    throw Error(fmt::format("pm extract: the eye ({}, {}, {}) is at the point looked at ({}); give a --look-at away from it, or "
-                            "--no-cull to refine in every direction", view.eye.x(), view.eye.y(), view.eye.z(),
-                            o.look_at.empty() ? "the bounding box centre, with no --look-at" : "--look-at"));
-  view.fov_degrees = o.fov;
-  view.viewport_pixels = o.viewport;
-  view.aspect = o.aspect;
-  view.pixel_error = *o.pixel_error;
-  view.cull = !o.no_cull;
-  view.cull_backfaces = o.cull_backfaces;
   const LevelErrorKind kind = o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;
-  const SelectiveRefiner refiner(pm);
-  SelectiveLevel s = refiner.refine_for_view(view, kind);
-  std::optional<AttributeFitReport> fit;
-  if (o.fit_attributes) fit = fit_attributes_to_input(extract_level(pm, pm.max_level(), VertexOrder::Input).mesh, s.extracted.mesh);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  write_output(s.extracted.mesh, o.output, o.format, WriteOptions{}, inputs);
-  // A uniform level within the same budget, for comparison: the one `--distance` would pick from here.
-  const ScreenSpaceBudget uniform{view.pixel_error, (pm.bounds.center() - view.eye).norm(), view.fov_degrees, view.viewport_pixels};
-  const Index uniform_faces = pm.num_faces(level_for_view(pm, uniform, selection_kind(o)));
   const char* what = kind == LevelErrorKind::Bound ? "error bound" : "measured deviation";
-  if (o.json) {
-    nlohmann::json j{{"file", o.input},
-                     {"output", o.output},
-                     {"selective", true},
-                     {"eye", o.eye},
+  const SelectiveRefiner refiner(pm);
+  SelectiveMesh kept(refiner);
+  std::optional<Mesh> finest;  // for --fit-attributes
+  if (o.fit_attributes) finest = extract_level(pm, pm.max_level(), VertexOrder::Input).mesh;
+  nlohmann::json reports = nlohmann::json::array();
+  Index fewest = std::numeric_limits<Index>::max(), most = 0, changed = 0;
+  double widest = 0;
+  // Every viewer first, so that a bad line leaves no view written.
+  std::vector<Viewpoint> viewers;
+  for (const PathView& pv : lines) {
+    Viewpoint& view = viewers.emplace_back();
+    view.eye = pv.eye;
+    view.look_at = pv.look_at ? *pv.look_at : o.look_at.empty() ? pm.bounds.center() : point_option(o.look_at);
+    if (!o.no_cull && view.look_at == view.eye)
+      throw Error(fmt::format("pm extract: {}the eye ({}, {}, {}) is at the point looked at ({}); give a --look-at away from it, "
+                              "or --no-cull to refine in every direction",
+                              path ? fmt::format("{}:{}: ", *o.eye_path, pv.line) : "", view.eye.x(), view.eye.y(), view.eye.z(),
+                              pv.look_at ? "on its line" : o.look_at.empty() ? "the bounding box centre, with no --look-at" : "--look-at"));
+    view.fov_degrees = o.fov;
+    view.viewport_pixels = o.viewport;
+    view.aspect = o.aspect;
+    view.pixel_error = *o.pixel_error;
+    view.cull = !o.no_cull;
+    view.cull_backfaces = o.cull_backfaces;
+  }
+  for (std::size_t i = 0; i < viewers.size(); ++i) {
+    const Viewpoint& view = viewers[i];
+    SelectiveLevel s = kept.adapt(view, kind);
+    std::optional<AttributeFitReport> fit;
+    if (finest) fit = fit_attributes_to_input(*finest, s.extracted.mesh);
+    const std::string output = path ? numbered(o.output, i) : o.output;
+    write_output(s.extracted.mesh, output, o.format, WriteOptions{}, inputs);
+    // A uniform level within the same budget, for comparison: the one `--distance` would pick from here.
+    const ScreenSpaceBudget uniform{view.pixel_error, (pm.bounds.center() - view.eye).norm(), view.fov_degrees, view.viewport_pixels};
+    const Index uniform_faces = pm.num_faces(level_for_view(pm, uniform, selection_kind(o)));
+    const Index faces = s.extracted.mesh.num_faces();
+    fewest = std::min(fewest, faces), most = std::max(most, faces), widest = std::max(widest, s.max_pixels);
+    if (i > 0) changed += s.splits_refined + s.splits_coarsened;
+    nlohmann::json j{{"output", output},
+                     {"eye", {view.eye.x(), view.eye.y(), view.eye.z()}},
                      {"look_at", {view.look_at.x(), view.look_at.y(), view.look_at.z()}},
-                     {"faces", s.extracted.mesh.num_faces()},
+                     {"faces", faces},
                      {"vertices", s.extracted.mesh.num_vertices()},
                      {"splits_applied", s.splits_applied},
-                     {"splits", pm.max_level()},
-                     {"selected_by", what},
+                     {"splits_refined", s.splits_refined},
+                     {"splits_coarsened", s.splits_coarsened},
                      {"error_bound", s.error_bound},
                      {"deviation", s.deviation},
                      {"max_pixels", s.max_pixels},
                      {"regions_out_of_view", s.regions_outside},
                      {"regions_facing_away", s.regions_facing_away},
-                     {"uniform_level_faces", uniform_faces},
-                     {"bytes_read", r.bytes_read},
-                     {"seconds", seconds}};
+                     {"uniform_level_faces", uniform_faces}};
     if (fit) j["attribute_fit"] = attribute_fit_json(*fit);
+    if (!path && !o.json && !global.quiet) {
+      fmt::print(stderr,
+                 "pm extract: selective refinement for the eye at ({}, {}, {}): {} faces, {} vertices, {} of {} splits; {} "
+                 "projects to at most {:.3g} px in view (budget {} px); deviation {:.6g}, bound {:.6g}{}{}; read {} bytes, "
+                 "{:.1f} ms\n",
+                 view.eye.x(), view.eye.y(), view.eye.z(), thousands(faces), thousands(s.extracted.mesh.num_vertices()),
+                 thousands(s.splits_applied), thousands(pm.max_level()), what, s.max_pixels, view.pixel_error, s.deviation,
+                 s.error_bound, s.regions_outside ? fmt::format(", {} regions out of view left coarse", thousands(s.regions_outside)) : "",
+                 s.regions_facing_away ? fmt::format(", {} facing away", thousands(s.regions_facing_away)) : "",
+                 thousands(static_cast<long long>(r.bytes_read)),
+                 1000 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      fmt::print(stderr, "  a uniform level within the same budget from this distance has {} faces\n", thousands(uniform_faces));
+      if (fit) print_attribute_fit(*fit);
+    }
+    reports.push_back(std::move(j));
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (o.json) {
+    nlohmann::json j{{"file", o.input}, {"selective", true}, {"splits", pm.max_level()}, {"selected_by", what}};
+    if (path) {
+      j["eye_path"] = *o.eye_path;
+      j["views"] = std::move(reports);
+    } else {
+      j.update(reports[0]);
+    }
+    j["bytes_read"] = r.bytes_read;
+    j["seconds"] = seconds;
     fmt::print("{}\n", j.dump(2));
-  } else if (!global.quiet) {
+  } else if (path && !global.quiet) {
     fmt::print(stderr,
-               "pm extract: selective refinement for the eye at ({}, {}, {}): {} faces, {} vertices, {} of {} splits; {} "
-               "projects to at most {:.3g} px in view (budget {} px); deviation {:.6g}, bound {:.6g}{}{}; read {} bytes, "
-               "{:.1f} ms\n",
-               view.eye.x(), view.eye.y(), view.eye.z(), thousands(s.extracted.mesh.num_faces()),
-               thousands(s.extracted.mesh.num_vertices()), thousands(s.splits_applied), thousands(pm.max_level()), what,
-               s.max_pixels, view.pixel_error, s.deviation, s.error_bound,
-               s.regions_outside ? fmt::format(", {} regions out of view left coarse", thousands(s.regions_outside)) : "",
-               s.regions_facing_away ? fmt::format(", {} facing away", thousands(s.regions_facing_away)) : "",
-               thousands(static_cast<long long>(r.bytes_read)), 1000 * seconds);
-    fmt::print(stderr, "  a uniform level within the same budget from this distance has {} faces\n", thousands(uniform_faces));
-    if (fit) print_attribute_fit(*fit);
+               "pm extract: {} views along {}, one mesh kept from view to view: {} to {} faces, {:.1f} of {} splits applied or "
+               "undone per view after the first; {} projects to at most {:.3g} px in view (budget {} px); {} ... {} in {:.2f} s\n",
+               viewers.size(), *o.eye_path, thousands(fewest), thousands(most),
+               viewers.size() > 1 ? double(changed) / double(viewers.size() - 1) : 0.0, thousands(pm.max_level()), what, widest,
+               *o.pixel_error, numbered(o.output, 0), numbered(o.output, viewers.size() - 1), seconds);
   }
   return 0;
 }
 
 int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
-  const std::vector<std::string> inputs{o.input, o.prove_with.value_or("")};
+  const std::vector<std::string> inputs{o.input, o.prove_with.value_or(""), o.eye_path.value_or("")};
   refuse_to_overwrite(o.output, inputs);  // before reading: fail fast
   refuse_json_beside_stdout(o.json, o.output);
-  if (!o.eye.empty()) return run_selective(o, global, inputs);
-  if (!o.look_at.empty()) throw Error("pm extract: --look-at needs --eye");
+  if (!o.eye.empty() || o.eye_path) return run_selective(o, global, inputs);
+  if (!o.look_at.empty()) throw Error("pm extract: --look-at needs --eye or --eye-path");
   const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
   if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
   if (o.prove_with && !o.max_error && !o.pixel_error)
@@ -389,13 +478,11 @@ int run_geomorph(const PmCliOptions& o, const GlobalOptions& global) {
     write_output(g.at(*o.alpha), o.output, o.format, WriteOptions{}, {o.input});
   } else {
     // morph.ply -> morph_000.ply ... morph_NNN.ply, alpha from 0 to 1.
-    const fs::path out(o.output);
     Mesh frame;
     for (int i = 0; i < o.frames; ++i) {
       const double alpha = o.frames == 1 ? 1.0 : double(i) / double(o.frames - 1);
       g.evaluate(alpha, frame);
-      const fs::path path = out.parent_path() / fmt::format("{}_{:03d}{}", out.stem().string(), i, out.extension().string());
-      write_output(frame, path.string(), o.format, WriteOptions{}, {o.input});
+      write_output(frame, numbered(o.output, static_cast<std::size_t>(i)), o.format, WriteOptions{}, {o.input});
     }
   }
   if (!global.quiet)
@@ -476,6 +563,10 @@ Examples:
                       "Selective refinement: refine each region only as far as --pixel-error asks from this eye, x,y,z "
                       "(reads the whole file)")
       ->delimiter(',')->expected(3)->excludes("--distance");
+  extract->add_option("--eye-path", opt->eye_path,
+                      "Selective refinement for each eye of this file, one per line (x,y,z, or x,y,z,lx,ly,lz with the "
+                      "point looked at), written to OUT_000 ...; one mesh is kept from view to view")
+      ->excludes("--distance");
   extract->add_option("--look-at", opt->look_at, "With --eye: the point looked at, x,y,z (default: the bounding box centre)")
       ->delimiter(',')->expected(3);
   extract->add_option("--aspect", opt->aspect, "With --eye: viewport width over height")->check(kPositive)->capture_default_str();
@@ -499,7 +590,8 @@ The error is the level's measured distance to the input when the stream was buil
 With --eye, each region of the mesh is refined on its own (selective refinement): d is the distance
 from the eye to the region, whose error is its measured deviation (its guaranteed bound with
 --certified); regions outside the view cone stay coarse unless --no-cull, and so do regions facing
-away with --cull-backfaces.
+away with --cull-backfaces. --eye-path does so for each line of a file (a camera path), keeping one
+mesh from view to view: each view applies and undoes only the splits that change.
 Only the blocks the chosen level needs are read (all of them with --input-order, --prove-with or
 --fit-attributes).
 Examples:
@@ -508,7 +600,8 @@ Examples:
   lodkit pm extract human.pm -o human_2k.ply --faces 2000 --fit-attributes   # shading as simplify's
   lodkit pm extract bunny.pm -o far.ply --pixel-error 0.5 --distance 2 --fov 45 --viewport 1440
   lodkit pm extract bunny.pm -o seen.ply --pixel-error 1 --distance 2 --prove-with bunny.ply
-  lodkit pm extract terrain.pm -o view.ply --pixel-error 1 --eye -0.6,-0.6,0.1 --look-at 0.5,0.5,0)");
+  lodkit pm extract terrain.pm -o view.ply --pixel-error 1 --eye -0.6,-0.6,0.1 --look-at 0.5,0.5,0
+  lodkit pm extract bunny.pm -o view.ply --pixel-error 1 --eye-path orbit.csv   # view_000.ply ...)");
 
   CLI::App* morph = pm->add_subcommand("geomorph", "Blend between two levels (Hoppe's geomorphs)");
   morph->add_option("input", opt->input, "A .pm file, or - for stdin")->required();
