@@ -8,6 +8,9 @@
 #include <lodkit/primitives.h>
 #include <lodkit/progressive.h>
 
+#include <cstring>
+#include <zlib.h>
+
 #include "test_util.h"
 
 namespace lodkit {
@@ -357,6 +360,58 @@ TEST(PmStream, FlippedBitsAreCaughtByTheChecksums) {
       EXPECT_NE(std::string(e.what()).find("flip.pm"), std::string::npos);
     }
   }
+}
+
+// Replaces the first occurrence of `from`'s bytes after the header with `to`'s and mends the checksum
+// of the chunk holding them: a stream that is intact but says something else.
+std::string rewrite_double(std::string bytes, double from, double to) {
+  const std::string a(reinterpret_cast<const char*>(&from), 8), b(reinterpret_cast<const char*>(&to), 8);
+  const std::size_t at = bytes.find(a, 100);
+  if (at == std::string::npos) return {};
+  bytes.replace(at, 8, b);
+  for (std::size_t chunk = 100; chunk + 9 <= bytes.size();) {  // type, u32 length, payload, u32 CRC
+    std::uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + chunk + 1, 4);
+    const std::size_t end = chunk + 5 + length;
+    if (at >= chunk && at < end) {
+      const std::uint32_t crc = static_cast<std::uint32_t>(
+          crc32(0, reinterpret_cast<const unsigned char*>(bytes.data() + chunk), static_cast<unsigned>(end - chunk)));
+      std::memcpy(bytes.data() + end, &crc, 4);
+      return bytes;
+    }
+    chunk = end + 4;
+  }
+  return {};
+}
+
+TEST(PmStream, PositionsPastTheRangeOfAFloatAreRefused) {
+  // A fuzzed stream put points near 1e210: finite, but their squares overflow, so regions, distances
+  // and selective refinement's hierarchy turned to NaN. Such a split block is damage (the levels
+  // before it survive), such a base an error, as for any mesh.
+  const ProgressiveMesh pm = build_progressive_mesh(test::bumpy_sphere(2, 0.05));
+  PmWriteOptions wo;
+  wo.splits_per_block = 16;
+  const std::string bytes = write_pm_to_memory(pm, wo);
+  const std::size_t late = pm.splits.size() - 3;
+  const std::string far_split = rewrite_double(bytes, pm.splits[late].position.x(), 1e210);
+  ASSERT_FALSE(far_split.empty());
+  const PmReadResult r = read_pm_from_memory(far_split, "far.pm");
+  EXPECT_NE(r.warning.find("beyond the range of a float"), std::string::npos) << r.warning;
+  EXPECT_LT(r.pm.max_level(), static_cast<Index>(late) + 1);
+  EXPECT_GT(r.pm.max_level(), 0);
+  (void)SelectiveRefiner(r.pm);  // what survives is sound
+  const std::string far_base = rewrite_double(bytes, pm.base_positions[0].y(), -1e210);
+  ASSERT_FALSE(far_base.empty());
+  try {
+    (void)read_pm_from_memory(far_base, "far.pm");
+    ADD_FAILURE() << "a base point at -1e210 was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("beyond the range of a float"), std::string::npos) << e.what();
+  }
+  // And a progressive mesh made in memory is checked as one read from a file.
+  ProgressiveMesh far = pm;
+  far.splits[late].new_position.z() = 1e210;
+  EXPECT_THROW(SelectiveRefiner{far}, Error);
 }
 
 TEST(PmStream, FilesAreWrittenAtomicallyAndBadFilesAreNamed) {

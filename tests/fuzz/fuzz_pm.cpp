@@ -1,6 +1,8 @@
 // libFuzzer target: a .pm stream's bytes. Reading must return what survives or throw lodkit::Error;
 // the levels it returns must extract, geomorph and refine selectively (for a view culling back
-// faces, and for every other split) without a crash or a sanitizer report, each vertex index in range.
+// faces, and for every other split) without a crash or a sanitizer report, each vertex index in range;
+// the view's splits found down the hierarchy must be those of testing every region, and a kept mesh
+// moved from one set to the other must give the same meshes.
 #include <lodkit/error.h>
 #include <lodkit/pm_io.h>
 #include <lodkit/progressive.h>
@@ -29,12 +31,25 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     view.cull_backfaces = true;
     std::vector<char> every_other(static_cast<std::size_t>(n), 0);
     for (std::size_t j = 0; j < every_other.size(); j += 2) every_other[j] = 1;
-    for (const SelectiveLevel& s : {refiner.refine_for_view(view, LevelErrorKind::Measured), refiner.refine(every_other)}) {
+    const SelectiveLevel seen = refiner.refine_for_view(view, LevelErrorKind::Measured), half = refiner.refine(every_other);
+    for (const SelectiveLevel& s : {seen, half}) {
       const Mesh& m = s.extracted.mesh;
       for (Index f = 0; f < m.num_faces(); ++f)
         for (int k = 0; k < 3; ++k)
           if (m.triangles(f, k) < 0 || m.triangles(f, k) >= m.num_vertices()) __builtin_trap();
     }
+    // The hierarchy finds what testing every region finds; a kept mesh moves between sets exactly.
+    std::vector<char> every = refiner.regions_needing_refinement(view, LevelErrorKind::Measured);
+    for (std::size_t j = every.size(); j-- > 0;)
+      if (every[j])
+        for (Index d : refiner.dependencies(static_cast<Index>(j))) every[static_cast<std::size_t>(d)] = 1;
+    if (every != refiner.splits_for_view(view, LevelErrorKind::Measured)) __builtin_trap();
+    SelectiveMesh kept(refiner);
+    if (kept.go_to(every_other).extracted.mesh.triangles != half.extracted.mesh.triangles) __builtin_trap();
+    const SelectiveLevel moved = kept.adapt(view, LevelErrorKind::Measured);
+    if (moved.extracted.mesh.triangles != seen.extracted.mesh.triangles ||
+        moved.extracted.mesh.positions != seen.extracted.mesh.positions)
+      __builtin_trap();
   } catch (const Error&) {
   }
   return 0;

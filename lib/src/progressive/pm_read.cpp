@@ -19,8 +19,9 @@ namespace {
 
 constexpr std::size_t kMaxSymbols = std::size_t(1) << 31;
 
-/// Appends the state's new values to `pm` as the split the record describes (called before applying).
-void append_split(ProgressiveMesh& pm, const StreamState& st, const SplitRecord& r, double error) {
+/// Appends the state's new values to `pm` as the split the record describes (called before applying);
+/// false, appending nothing, when a position lies beyond the range of a float (as for any mesh).
+bool append_split(ProgressiveMesh& pm, const StreamState& st, const SplitRecord& r, double error) {
   const std::size_t dims = static_cast<std::size_t>(st.dims);
   VertexSplit v;
   v.point = r.point;
@@ -36,6 +37,7 @@ void append_split(ProgressiveMesh& pm, const StreamState& st, const SplitRecord&
     v.position = r.fine_position;
     v.new_position = r.new_position;
   }
+  if (!within_coordinate_range(v.position) || !within_coordinate_range(v.new_position)) return false;
   const Index t = st.num_points();
   for (Index i = 0; i < r.num_wedges; ++i) {
     pm.wedge_point.push_back(t);
@@ -68,6 +70,7 @@ void append_split(ProgressiveMesh& pm, const StreamState& st, const SplitRecord&
   }
   pm.splits.push_back(v);
   pm.level_error.push_back(error);
+  return true;
 }
 
 /// Drops every split after `level` (appending is all a block does to `pm`).
@@ -209,6 +212,9 @@ bool decode_base(std::string_view payload, const Header& h, StreamState& st, Pro
       for (std::uint32_t c : colour_codes) colours.push_back(face_colour_value(c, h.colour_bits));
     }
   }
+  // As for any mesh (validate()): squares of coordinates past a float's range overflow distances.
+  for (const Eigen::Vector3d& p : st.position)
+    if (!within_coordinate_range(p)) return fail("a base position beyond the range of a float");
   if (faces.size() != 3 * nf) return fail("bad base faces");
   for (std::size_t f = 0; f < nf; ++f) {
     std::array<Index, 3> c{};
@@ -463,7 +469,8 @@ bool decode_block(std::string_view payload, const Header& h, StreamState& st, Pr
       stopped = true;
       return true;
     }
-    append_split(pm, st, rec, error_value(code, h.reference()) + (st.quantised ? slack : 0.0));
+    if (!append_split(pm, st, rec, error_value(code, h.reference()) + (st.quantised ? slack : 0.0)))
+      return bad("a position beyond the range of a float");
     apply_split(st, rec);
   }
   for (int i = 0; i < kStreamCount; ++i)

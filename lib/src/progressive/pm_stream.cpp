@@ -120,8 +120,8 @@ bool decode_header(const char* bytes, Header& h, std::string& why) {
     return false;
   }
   for (int i = 0; i < 3; ++i)
-    if (!std::isfinite(h.box_min[i]) || !std::isfinite(h.box_max[i])) {
-      why = "non-finite bounding box in the header";
+    if (!(std::abs(h.box_min[i]) <= kLargestCoordinate) || !(std::abs(h.box_max[i]) <= kLargestCoordinate)) {
+      why = "a bounding box in the header that is not finite or lies beyond the range of a float";
       return false;
     }
   return true;

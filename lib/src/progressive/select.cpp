@@ -91,6 +91,13 @@ void validate(const ProgressiveMesh& pm, const std::string& context) {
   if (pm.level_error.size() != pm.splits.size() + 1) fail("one error bound per level is needed");
   if (static_cast<std::size_t>(pm.num_wedges(pm.max_level())) != nw || static_cast<std::size_t>(pm.num_faces(pm.max_level())) != nf)
     fail("the last split does not end at the wedge and face counts");
+  // As for any mesh: squares of coordinates past a float's range overflow every distance.
+  for (Index p = 0; p < pm.base_points; ++p)
+    if (!within_coordinate_range(pm.base_positions[static_cast<std::size_t>(p)]))
+      fail(fmt::format("base point {} lies beyond the range of a float (or is not finite)", p));
+  for (std::size_t j = 0; j < pm.splits.size(); ++j)
+    for (const Eigen::Vector3d& p : {pm.splits[j].position, pm.splits[j].coarse_position, pm.splits[j].new_position})
+      if (!within_coordinate_range(p)) fail(fmt::format("split {} places a point beyond the range of a float (or not finite)", j));
   for (Index w = 0; w < pm.base_wedges; ++w)
     if (pm.wedge_point[w] < 0 || pm.wedge_point[w] >= pm.base_points) fail(fmt::format("base wedge {} has no base point", w));
   for (Index f = 0; f < pm.base_faces; ++f)
