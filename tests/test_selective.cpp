@@ -380,7 +380,7 @@ TEST(SelectiveMesh, EveryStateIsTheSetsMeshWhateverCameBefore) {
     for (int step = 0; step < 24; ++step) {
       std::vector<char> wanted(n, step % 8 == 7 ? 1 : 0);
       if (step % 8 < 6) {
-        std::bernoulli_distribution pick(std::array{0.001, 0.01, 0.05, 0.2, 0.5, 0.02}[step % 8 < 6 ? step % 8 : 0]);
+        std::bernoulli_distribution pick(std::array{0.001, 0.01, 0.05, 0.2, 0.5, 0.02}[step % 8]);
         for (char& w : wanted) w = pick(rng);
       }
       const SelectiveLevel kept = mesh.go_to(wanted), fresh = refiner.refine(wanted);

@@ -293,9 +293,6 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
   SelectiveMesh kept(refiner);
   std::optional<Mesh> finest;  // for --fit-attributes
   if (o.fit_attributes) finest = extract_level(pm, pm.max_level(), VertexOrder::Input).mesh;
-  nlohmann::json reports = nlohmann::json::array();
-  Index fewest = std::numeric_limits<Index>::max(), most = 0, changed = 0;
-  double widest = 0;
   // Every viewer first, so that a bad line leaves no view written.
   std::vector<Viewpoint> viewers;
   for (const PathView& pv : lines) {
@@ -314,6 +311,9 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
     view.cull = !o.no_cull;
     view.cull_backfaces = o.cull_backfaces;
   }
+  nlohmann::json reports = nlohmann::json::array();
+  Index fewest = std::numeric_limits<Index>::max(), most = 0, changed = 0;
+  double widest = 0;
   for (std::size_t i = 0; i < viewers.size(); ++i) {
     const Viewpoint& view = viewers[i];
     SelectiveLevel s = kept.adapt(view, kind);
