@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <fmt/format.h>
 #include <numbers>
 
@@ -21,6 +23,13 @@
 
 namespace lodkit {
 namespace {
+
+// Whether any of the eight flags from `at` is set.
+bool any_set(const char* at) {
+  std::uint64_t word;
+  std::memcpy(&word, at, 8);
+  return word != 0;
+}
 
 // Removes one occurrence of f from the list, if there.
 void erase_one(std::vector<Index>& list, Index f) {
@@ -213,8 +222,6 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   }
   // Deviations, from the finest level up: the split's own, plus the larger of what the two points
   // after it deviate by (a distance to a surface within that of the finer one), never past the bound.
-  made_by_.resize(n);
-  for (std::size_t j = 0; j < n; ++j) made_by_[j] = pm.splits[j].point >= pm.base_points ? pm.splits[j].point - pm.base_points : -1;
   next_at_point_.assign(n, -1);
   first_at_point_.assign(points, -1);
   for (std::size_t j = n; j-- > 0;) {
@@ -267,21 +274,28 @@ std::span<const Index> SelectiveRefiner::dependencies(Index split) const {
 }
 
 void SelectiveRefiner::close(std::vector<char>& wanted) const {
-  // Dependencies are earlier: one pass from the last split down closes the set.
-  for (std::size_t j = wanted.size(); j-- > 0;)
+  // Dependencies are earlier: one pass from the last split down closes the set (eight flags at a time
+  // where none is set: a view wants few of a large stream's splits).
+  for (std::size_t j = wanted.size(); j-- > 0;) {
+    if (j >= 7 && (j & 7) == 7 && !any_set(wanted.data() + j - 7)) {
+      j -= 7;
+      continue;
+    }
     if (wanted[j])
       for (Index d : dependencies(static_cast<Index>(j))) wanted[static_cast<std::size_t>(d)] = 1;
+  }
 }
 
 std::vector<Index> SelectiveRefiner::frontier(const std::vector<char>& applied) const {
-  // Not applied, after its point was made and its point's split before it (small arrays, in order).
+  // The splits not applied just below an applied one in the hierarchy, or at its top: a point's first
+  // split not applied (its split before, and the one that made it, are).
   std::vector<Index> out;
-  for (std::size_t j = 0; j < applied.size(); ++j) {
-    const Index made_by = made_by_[j], previous = previous_at_point_[j];
-    if (!applied[j] && (made_by < 0 || applied[static_cast<std::size_t>(made_by)]) &&
-        (previous < 0 || applied[static_cast<std::size_t>(previous)]))
-      out.push_back(static_cast<Index>(j));
-  }
+  for (Index p = 0; p < pm_->base_points; ++p)
+    if (const Index j = first_at_point_[static_cast<std::size_t>(p)]; j >= 0 && !applied[static_cast<std::size_t>(j)]) out.push_back(j);
+  for (std::size_t j = 0; j < applied.size(); ++j)
+    if (applied[j])
+      for (Index k : below(static_cast<Index>(j)))
+        if (k >= 0 && !applied[static_cast<std::size_t>(k)]) out.push_back(k);
   return out;
 }
 
@@ -485,21 +499,25 @@ SelectiveLevel SelectiveMesh::move_to(const std::vector<char>& wanted, const Sel
   // Undone from the last: a later split left applied depends on none of these (the set stays closed),
   // so each one's faces hold just what it wrote. Then the new ones in order, as refine() applies them.
   const ProgressiveMesh& pm = *refiner_->pm_;
-  Index refined = 0, coarsened = 0;
-  for (std::size_t j = applied_.size(); j-- > 0;)
-    if (applied_[j] && !wanted[j]) {
-      detail::apply_split(pm, static_cast<Index>(j), false, positions_, attributes_, corners_);
-      applied_[j] = 0;
-      ++coarsened;
+  std::vector<Index> undo, redo;  // what changes: a step's few splits (skipped eight at a time where none does)
+  const std::size_t n = applied_.size();
+  for (std::size_t j = 0; j < n; ++j) {
+    if ((j & 7) == 0 && j + 8 <= n && std::memcmp(applied_.data() + j, wanted.data() + j, 8) == 0) {
+      j += 7;
+      continue;
     }
-  for (std::size_t j = 0; j < applied_.size(); ++j)
-    if (!applied_[j] && wanted[j]) {
-      detail::apply_split(pm, static_cast<Index>(j), true, positions_, attributes_, corners_);
-      applied_[j] = 1;
-      ++refined;
-    }
+    if (applied_[j] != wanted[j]) (applied_[j] ? undo : redo).push_back(static_cast<Index>(j));
+  }
+  for (auto j = undo.rbegin(); j != undo.rend(); ++j) {
+    detail::apply_split(pm, *j, false, positions_, attributes_, corners_);
+    applied_[static_cast<std::size_t>(*j)] = 0;
+  }
+  for (Index j : redo) {
+    detail::apply_split(pm, j, true, positions_, attributes_, corners_);
+    applied_[static_cast<std::size_t>(j)] = 1;
+  }
   SelectiveLevel out = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
-  out.splits_refined = refined, out.splits_coarsened = coarsened;
+  out.splits_refined = static_cast<Index>(redo.size()), out.splits_coarsened = static_cast<Index>(undo.size());
   return out;
 }
 
