@@ -370,8 +370,8 @@ class SelectiveRefiner {
 
   const ProgressiveMesh* pm_;
   std::vector<Index> dependency_start_, dependencies_;  // CSR: split j's are [start[j], start[j + 1])
-  std::vector<Index> previous_at_point_, next_at_point_;  // per split: the split of its point before it, after it, or -1
-  std::vector<Index> first_at_point_;                    // per point: its first split, or -1
+  std::vector<Index> next_at_point_;   // per split: the next split of its point, or -1
+  std::vector<Index> first_at_point_;  // per point: its first split, or -1
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_, deviation_;
   double beyond_bound_ = 0, beyond_deviation_ = 0;  // the last level's bound and measured error (0 when it is the input)

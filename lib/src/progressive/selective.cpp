@@ -201,7 +201,6 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   UniformWalk walk = walk_uniform_sequence(pm);
   dependency_start_ = std::move(walk.start);
   dependencies_ = std::move(walk.dependencies);
-  previous_at_point_ = std::move(walk.previous_at_point);
 
   // Regions, from the finest level up: the ball of a point before split j holds its balls after the
   // split and the new point's.
@@ -225,7 +224,7 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   next_at_point_.assign(n, -1);
   first_at_point_.assign(points, -1);
   for (std::size_t j = n; j-- > 0;) {
-    if (previous_at_point_[j] >= 0) next_at_point_[static_cast<std::size_t>(previous_at_point_[j])] = static_cast<Index>(j);
+    if (const Index previous = walk.previous_at_point[j]; previous >= 0) next_at_point_[static_cast<std::size_t>(previous)] = static_cast<Index>(j);
     first_at_point_[static_cast<std::size_t>(pm.splits[j].point)] = static_cast<Index>(j);
   }
   deviation_.resize(n);
