@@ -9,12 +9,10 @@
 #include <sstream>
 #include <string_view>
 
+#include "seconds_since.h"
+
 namespace lodkit::bench {
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // The input's vertex normals, UVs and colours, each output vertex taking its origin's: what a peer's
 // output carries, being input vertices. Nothing when `run.vertex_origin` is empty.

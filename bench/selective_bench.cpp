@@ -9,14 +9,11 @@
 #include <fmt/format.h>
 
 #include "mesh_list_main.h"
+#include "seconds_since.h"
 
 using namespace lodkit;
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
 
 constexpr const char* kUsage =
     "usage: lodkit_bench_selective MESH...\n"

@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "mesh_list_main.h"
+#include "seconds_since.h"
 
 using namespace lodkit;
 
@@ -24,9 +25,6 @@ constexpr const char* kUsage =
     "mean milliseconds per view from the base and kept, the mean splits applied and undone per view\n"
     "when kept, and the mean splits applied and faces. Each kept view is checked against the fresh one.\n"
     "Example: build/bench/lodkit_bench_selective_path ../shared/models/scans/stanford_bunny_zipper.ply\n";
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) { return 1000 * std::chrono::duration<double>(Clock::now() - t).count(); }
 
 int run(int argc, char** argv) {
   fmt::print("mesh,faces,splits,path,views,fresh_ms,kept_ms,changed_per_view,splits_applied,view_faces\n");
@@ -54,12 +52,12 @@ int run(int argc, char** argv) {
         Viewpoint view;
         view.eye = eye_at(v);
         view.look_at = centre;
-        auto t = Clock::now();
+        auto t = std::chrono::steady_clock::now();
         const SelectiveLevel a = refiner.refine_for_view(view, LevelErrorKind::Measured);
-        fresh_ms += ms_since(t);
-        t = Clock::now();
+        fresh_ms += 1000 * seconds_since(t);
+        t = std::chrono::steady_clock::now();
         const SelectiveLevel b = kept.adapt(view, LevelErrorKind::Measured);
-        kept_ms += ms_since(t);
+        kept_ms += 1000 * seconds_since(t);
         if (a.extracted.mesh.triangles != b.extracted.mesh.triangles || a.extracted.mesh.positions != b.extracted.mesh.positions)
           throw std::runtime_error(fmt::format("{}: view {} of the {} differs kept", path, v, name));
         if (v > 0) changed += double(b.splits_refined + b.splits_coarsened);  // the first view starts from the base
