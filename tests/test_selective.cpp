@@ -426,5 +426,118 @@ TEST(SelectiveMesh, FollowsAMovingViewerChangingOnlyWhatTheViewChanges) {
   EXPECT_LT(changed, held / 20) << changed << " splits changed, " << held << " held";
 }
 
+// A mesh's faces with area as comparable rows: per corner its position and attribute values, each face
+// turned to start at its least corner, the faces sorted. Faces with two corners at one place are left
+// out and counted.
+std::vector<std::vector<double>> faces_with_area(const Mesh& m, Index& without) {
+  std::vector<std::vector<double>> out;
+  without = 0;
+  for (Index f = 0; f < m.num_faces(); ++f) {
+    std::array<std::vector<double>, 3> corner;
+    for (int k = 0; k < 3; ++k) {
+      const Index v = m.triangles(f, k);
+      for (int d = 0; d < 3; ++d) corner[k].push_back(m.positions(v, d));
+      if (m.has_normals()) for (int d = 0; d < 3; ++d) corner[k].push_back(m.attributes.normals(v, d));
+      if (m.has_uvs()) for (int d = 0; d < 2; ++d) corner[k].push_back(m.attributes.uvs(v, d));
+      if (m.has_colours()) for (int d = 0; d < 4; ++d) corner[k].push_back(m.attributes.colours(v, d));
+    }
+    auto at = [&](int k) { return m.positions.row(m.triangles(f, k)); };
+    if (at(0) == at(1) || at(1) == at(2) || at(0) == at(2)) {
+      ++without;
+      continue;
+    }
+    const int first = static_cast<int>(std::min_element(corner.begin(), corner.end()) - corner.begin());
+    std::vector<double>& row = out.emplace_back();
+    for (int k = 0; k < 3; ++k) row.insert(row.end(), corner[(first + k) % 3].begin(), corner[(first + k) % 3].end());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// A morph from the state `before` (its mesh) to `reached`: the connectivity of both sets together, at
+// alpha 0 the faces of `before` exactly and nothing else with area, at 1 those of `reached`.
+void expect_morph_between(const SelectiveRefiner& refiner, const SelectiveMorph& m, const SelectiveLevel& before,
+                          const std::vector<char>& applied_before, const std::vector<char>& applied_after, const std::string& what) {
+  std::vector<char> both = applied_before;
+  for (std::size_t j = 0; j < both.size(); ++j) both[j] |= applied_after[j];
+  const SelectiveLevel joint = refiner.refine(both);
+  const Geomorph& g = m.geomorph;
+  EXPECT_EQ(g.fine.mesh.triangles, joint.extracted.mesh.triangles) << what;
+  EXPECT_EQ(g.fine.vertex_wedge, joint.extracted.vertex_wedge) << what;
+  EXPECT_EQ(g.coarse_level, before.splits_applied) << what;
+  EXPECT_EQ(g.fine_level, m.reached.splits_applied) << what;
+  for (const auto& [alpha, state] : {std::pair{0.0, &before}, std::pair{1.0, &m.reached}}) {
+    Index degenerate = 0, none = 0;
+    const auto morphed = faces_with_area(g.at(alpha), degenerate);
+    const auto expected = faces_with_area(state->extracted.mesh, none);
+    ASSERT_EQ(none, 0) << what;  // (the inputs have no such faces)
+    EXPECT_TRUE(morphed == expected) << what << ", alpha " << alpha << ": " << morphed.size() << " faces with area, "
+                                     << expected.size() << " expected";
+    EXPECT_EQ(degenerate, joint.extracted.mesh.num_faces() - state->extracted.mesh.num_faces()) << what << ", alpha " << alpha;
+  }
+  // Between the ends every vertex is on its way: none leaves the box of its two ends.
+  const Mesh half = g.at(0.5);
+  for (Index v = 0; v < half.num_vertices(); ++v)
+    for (int d = 0; d < 3; ++d)
+      ASSERT_TRUE(half.positions(v, d) >= std::min(g.start_positions(v, d), g.fine.mesh.positions(v, d)) &&
+                  half.positions(v, d) <= std::max(g.start_positions(v, d), g.fine.mesh.positions(v, d))) << what;
+}
+
+TEST(SelectiveMesh, AMorphStartsAtTheStateBeforeAndEndsAtTheNewOne) {
+  // Random sets one after another, refining and coarsening at once: each morph's ends look exactly like
+  // the two states (positions and attributes), its connectivity is both sets', and the state reached is
+  // refine()'s for the new set, as go_to() would leave it.
+  std::mt19937 rng(29);
+  for (const Mesh& input : inputs()) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    const SelectiveRefiner refiner(pm);
+    const std::size_t n = pm.splits.size();
+    SelectiveMesh mesh(refiner);
+    SelectiveLevel before = refiner.refine(std::vector<char>(n, 0));
+    for (int step = 0; step < 10; ++step) {
+      std::vector<char> wanted(n, step == 8 ? 1 : 0);
+      if (step < 8) {
+        std::bernoulli_distribution pick(std::array{0.01, 0.05, 0.2, 0.5}[step % 4]);
+        for (char& w : wanted) w = pick(rng);
+      }
+      const std::vector<char> applied_before = mesh.applied();
+      const SelectiveMorph m = mesh.morph_to(wanted);
+      const SelectiveLevel fresh = refiner.refine(wanted);
+      const std::string what = fmt::format("{} faces, step {}: {} -> {} of {} splits", input.num_faces(), step,
+                                           before.splits_applied, fresh.splits_applied, n);
+      expect_same_level(m.reached, fresh, what);
+      expect_morph_between(refiner, m, before, applied_before, mesh.applied(), what);
+      before = fresh;
+    }
+  }
+}
+
+TEST(SelectiveMesh, MorphsFromViewToViewAsAdaptMoves) {
+  const ProgressiveMesh pm = build_progressive_mesh(test::seamed_uv_sphere());
+  const SelectiveRefiner refiner(pm);
+  SelectiveMesh morphing(refiner), moving(refiner);
+  SelectiveLevel before = refiner.refine(std::vector<char>(pm.splits.size(), 0));
+  Index refined = 0, coarsened = 0;
+  for (int frame = 0; frame < 12; ++frame) {
+    Viewpoint view;
+    const double angle = 0.4 * frame, distance = 2.0 + 0.5 * std::sin(frame);
+    view.eye = {distance * std::sin(angle), 0.2, distance * std::cos(angle)};
+    view.look_at = {0, 0, 0};
+    view.viewport_pixels = 400;
+    const std::vector<char> applied_before = morphing.applied();
+    const SelectiveMorph m = morphing.morph_to_view(view, LevelErrorKind::Measured);
+    const SelectiveLevel kept = moving.adapt(view, LevelErrorKind::Measured);
+    const std::string what = fmt::format("frame {}", frame);
+    expect_same_level(m.reached, kept, what);
+    EXPECT_EQ(m.reached.splits_refined, kept.splits_refined) << what;
+    EXPECT_EQ(m.reached.splits_coarsened, kept.splits_coarsened) << what;
+    expect_morph_between(refiner, m, before, applied_before, morphing.applied(), what);
+    refined += m.reached.splits_refined, coarsened += m.reached.splits_coarsened;
+    before = kept;
+  }
+  EXPECT_GT(refined, 0);
+  EXPECT_GT(coarsened, 0);  // both ways blend
+}
+
 }  // namespace
 }  // namespace lodkit

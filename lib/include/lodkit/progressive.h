@@ -362,6 +362,12 @@ class SelectiveRefiner {
   /// point it makes (-1 where there is none).
   std::array<Index, 2> below(Index split) const;
   SelectiveLevel apply_closed(const std::vector<char>& applied, const ViewTest* view) const;  // from the base
+  /// The mesh of the closed set `applied` from the state's arrays, in stream order.
+  ExtractedLevel mesh_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
+                         const std::vector<Index>& corners, const std::vector<char>& applied) const;
+  /// The wedge that stands for `wedge` in the closed set `applied`: itself, or its parent's, while the
+  /// split that made it is not applied.
+  Index ancestor(Index wedge, const std::vector<char>& applied) const;
   /// The mesh the state holds with the closed set `applied`, its errors, and what `view` (if any) sees.
   SelectiveLevel level_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
                           const std::vector<Index>& corners, const std::vector<char>& applied, const ViewTest* view) const;
@@ -372,6 +378,7 @@ class SelectiveRefiner {
   std::vector<Index> dependency_start_, dependencies_;  // CSR: split j's are [start[j], start[j + 1])
   std::vector<Index> next_at_point_;   // per split: the next split of its point, or -1
   std::vector<Index> first_at_point_;  // per point: its first split, or -1
+  std::vector<Index> wedge_split_;     // per wedge: the split that makes it, or -1 (the base's)
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_, deviation_;
   double beyond_bound_ = 0, beyond_deviation_ = 0;  // the last level's bound and measured error (0 when it is the input)
@@ -381,6 +388,20 @@ class SelectiveRefiner {
   // Per split, what lies at or below it: a ball around its region's centre holding every region there,
   // and the largest bound and deviation.
   std::vector<double> reach_radius_, reach_bound_, reach_deviation_;
+};
+
+/// A change of a SelectiveMesh's state as a geomorph (Hoppe 1997, section 5), so that a viewer sees it
+/// blend in over a few frames instead of popping: the connectivity of both states' splits together,
+/// every vertex moving from its ancestor's place and attributes in the state before (at alpha 0 the
+/// mesh looks exactly like that state: the faces only the new splits make have no area) to those in
+/// the new state (alpha 1 looks exactly like it: the faces only the splits undone make have none).
+/// Both refining and coarsening blend, in one morph.
+struct SelectiveMorph {
+  /// `geomorph.fine` holds the joint connectivity at the new state's shape; its coarse_level and
+  /// fine_level are the splits applied before and after (either may be the larger).
+  Geomorph geomorph;
+  /// The new state, as go_to() and adapt() report it: the mesh to show once the morph is over.
+  SelectiveLevel reached;
 };
 
 /// A selectively refined mesh kept from view to view (Hoppe 1997): moving to another set of splits
@@ -398,11 +419,21 @@ class SelectiveMesh {
   SelectiveLevel go_to(std::vector<char> wanted);
   /// Moves to the splits the view needs (refine_for_view()'s set and report).
   SelectiveLevel adapt(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound);
+  /// As go_to() and adapt(), with the change as a geomorph from the state before to the new one.
+  SelectiveMorph morph_to(std::vector<char> wanted);
+  SelectiveMorph morph_to_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound);
   /// Per split, whether it is applied now.
   const std::vector<char>& applied() const { return applied_; }
 
  private:
+  struct Change {
+    std::vector<Index> undo, redo;  // the splits applied now and not wanted, and the reverse, in order
+  };
+  Change change_to(const std::vector<char>& wanted) const;
+  void undo(const std::vector<Index>& splits);  // the last first
+  void redo(const std::vector<Index>& splits);  // in order
   SelectiveLevel move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view);  // wanted is closed
+  SelectiveMorph morph(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view);    // wanted is closed
 
   const SelectiveRefiner* refiner_;
   std::vector<Eigen::Vector3d> positions_;

@@ -227,6 +227,9 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
     if (const Index previous = walk.previous_at_point[j]; previous >= 0) next_at_point_[static_cast<std::size_t>(previous)] = static_cast<Index>(j);
     first_at_point_[static_cast<std::size_t>(pm.splits[j].point)] = static_cast<Index>(j);
   }
+  wedge_split_.assign(pm.wedge_point.size(), -1);
+  for (std::size_t j = 0; j < n; ++j)
+    std::fill_n(wedge_split_.begin() + pm.splits[j].first_wedge, pm.splits[j].num_wedges, static_cast<Index>(j));
   deviation_.resize(n);
   std::vector<detail::NormalCone>& cone = walk.cone;
   for (std::size_t j = n; j-- > 0;) {
@@ -319,27 +322,32 @@ SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied, 
 SelectiveLevel SelectiveRefiner::level_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
                                           const std::vector<Index>& corners, const std::vector<char>& applied,
                                           const ViewTest* view) const {
-  const ProgressiveMesh& pm = *pm_;
   const std::vector<Index> coarse = frontier(applied);
-  const std::size_t n = pm.splits.size();
-  std::vector<Index> faces(static_cast<std::size_t>(pm.base_faces));
-  for (Index f = 0; f < pm.base_faces; ++f) faces[static_cast<std::size_t>(f)] = f;
   SelectiveLevel out;
+  out.extracted = mesh_of(positions, attributes, corners, applied);
+  out.splits_applied = out.extracted.level;
   out.error_bound = beyond_bound_, out.deviation = beyond_deviation_;  // where every split is applied
-  for (std::size_t j = 0; j < n; ++j) {
-    if (!applied[j]) continue;
-    for (Index f = pm.splits[j].first_face; f < pm.splits[j].first_face + pm.splits[j].num_faces; ++f) faces.push_back(f);
-    ++out.splits_applied;
-  }
   // The error: at each point, the bound before its first split not applied.
   for (Index j : coarse) {
     out.error_bound = std::max(out.error_bound, error_[static_cast<std::size_t>(j)]);
     out.deviation = std::max(out.deviation, deviation_[static_cast<std::size_t>(j)]);
   }
+  if (view) report_view(*view, coarse, out);
+  return out;
+}
 
-  // The mesh, in stream order: faces by number, then the wedges they use by number.
-  ExtractedLevel& e = out.extracted;
-  e.level = out.splits_applied;
+ExtractedLevel SelectiveRefiner::mesh_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
+                                         const std::vector<Index>& corners, const std::vector<char>& applied) const {
+  // Faces by number (the base's, then those each applied split opens), then the wedges they use by number.
+  const ProgressiveMesh& pm = *pm_;
+  std::vector<Index> faces(static_cast<std::size_t>(pm.base_faces));
+  for (Index f = 0; f < pm.base_faces; ++f) faces[static_cast<std::size_t>(f)] = f;
+  ExtractedLevel e;
+  for (std::size_t j = 0; j < applied.size(); ++j) {
+    if (!applied[j]) continue;
+    for (Index f = pm.splits[j].first_face; f < pm.splits[j].first_face + pm.splits[j].num_faces; ++f) faces.push_back(f);
+    ++e.level;
+  }
   const std::size_t wedges = pm.wedge_point.size();
   std::vector<char> used(wedges, 0);
   for (Index f : faces)
@@ -360,8 +368,13 @@ SelectiveLevel SelectiveRefiner::level_of(const std::vector<Eigen::Vector3d>& po
     for (int k = 0; k < 3; ++k) m.triangles(i, k) = row_of[static_cast<std::size_t>(corners[3 * f + k])];
     if (pm.has_face_colours) m.attributes.face_colours.row(i) = pm.face_colours.row(static_cast<Index>(f));
   }
-  if (view) report_view(*view, coarse, out);
-  return out;
+  return e;
+}
+
+Index SelectiveRefiner::ancestor(Index wedge, const std::vector<char>& applied) const {
+  for (Index j; (j = wedge_split_[static_cast<std::size_t>(wedge)]) >= 0 && !applied[static_cast<std::size_t>(j)];)
+    wedge = pm_->wedge_parent[static_cast<std::size_t>(wedge)];
+  return wedge;
 }
 
 // A view's tests of a region: in the view cone, facing away, and the pixels its error projects to.
@@ -494,29 +507,75 @@ SelectiveMesh::SelectiveMesh(const SelectiveRefiner& refiner) : refiner_(&refine
   applied_.assign(refiner.pm_->splits.size(), 0);
 }
 
-SelectiveLevel SelectiveMesh::move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
-  // Undone from the last: a later split left applied depends on none of these (the set stays closed),
-  // so each one's faces hold just what it wrote. Then the new ones in order, as refine() applies them.
-  const ProgressiveMesh& pm = *refiner_->pm_;
-  std::vector<Index> undo, redo;  // what changes: a step's few splits (skipped eight at a time where none does)
+SelectiveMesh::Change SelectiveMesh::change_to(const std::vector<char>& wanted) const {
+  // A step's few splits (skipped eight at a time where none changes).
+  Change c;
   const std::size_t n = applied_.size();
   for (std::size_t j = 0; j < n; ++j) {
     if ((j & 7) == 0 && j + 8 <= n && std::memcmp(applied_.data() + j, wanted.data() + j, 8) == 0) {
       j += 7;
       continue;
     }
-    if (applied_[j] != wanted[j]) (applied_[j] ? undo : redo).push_back(static_cast<Index>(j));
+    if (applied_[j] != wanted[j]) (applied_[j] ? c.undo : c.redo).push_back(static_cast<Index>(j));
   }
-  for (auto j = undo.rbegin(); j != undo.rend(); ++j) {
-    detail::apply_split(pm, *j, false, positions_, attributes_, corners_);
+  return c;
+}
+
+// Undone from the last: a later split left applied depends on none of these (the set stays closed), so
+// each one's faces hold just what it wrote. New ones are applied in order, as refine() applies them.
+void SelectiveMesh::undo(const std::vector<Index>& splits) {
+  for (auto j = splits.rbegin(); j != splits.rend(); ++j) {
+    detail::apply_split(*refiner_->pm_, *j, false, positions_, attributes_, corners_);
     applied_[static_cast<std::size_t>(*j)] = 0;
   }
-  for (Index j : redo) {
-    detail::apply_split(pm, j, true, positions_, attributes_, corners_);
+}
+
+void SelectiveMesh::redo(const std::vector<Index>& splits) {
+  for (Index j : splits) {
+    detail::apply_split(*refiner_->pm_, j, true, positions_, attributes_, corners_);
     applied_[static_cast<std::size_t>(j)] = 1;
   }
+}
+
+SelectiveLevel SelectiveMesh::move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
+  const Change c = change_to(wanted);
+  undo(c.undo);
+  redo(c.redo);
   SelectiveLevel out = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
-  out.splits_refined = static_cast<Index>(redo.size()), out.splits_coarsened = static_cast<Index>(undo.size());
+  out.splits_refined = static_cast<Index>(c.redo.size()), out.splits_coarsened = static_cast<Index>(c.undo.size());
+  return out;
+}
+
+SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
+  // Through the union of both sets (closed, as both are): its connectivity, with each vertex's ancestor
+  // in the set before (read from the arrays as they were) and in the new set (once it is reached).
+  const ProgressiveMesh& pm = *refiner_->pm_;
+  const Change c = change_to(wanted);
+  const std::vector<char> before = applied_;
+  const std::vector<Eigen::Vector3d> positions_before = positions_;
+  const std::vector<double> attributes_before = attributes_;
+  redo(c.redo);
+  SelectiveMorph out;
+  Geomorph& g = out.geomorph;
+  g.fine = refiner_->mesh_of(positions_, attributes_, corners_, applied_);
+  undo(c.undo);
+  out.reached = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
+  out.reached.splits_refined = static_cast<Index>(c.redo.size()), out.reached.splits_coarsened = static_cast<Index>(c.undo.size());
+  g.coarse_level = static_cast<Index>(std::count(before.begin(), before.end(), 1));
+  g.fine_level = out.reached.splits_applied;
+
+  Mesh& end = g.fine.mesh;
+  Mesh start;
+  detail::size_level_mesh(pm, end.num_vertices(), 0, start);
+  for (Index row = 0; row < end.num_vertices(); ++row) {
+    const Index w = g.fine.vertex_wedge[static_cast<std::size_t>(row)];
+    detail::put_wedge(pm, positions_before, attributes_before, refiner_->ancestor(w, before), start, row);
+    detail::put_wedge(pm, positions_, attributes_, refiner_->ancestor(w, applied_), end, row);
+  }
+  g.start_positions = std::move(start.positions);
+  g.start_normals = std::move(start.attributes.normals);
+  g.start_uvs = std::move(start.attributes.uvs);
+  g.start_colours = std::move(start.attributes.colours);
   return out;
 }
 
@@ -529,6 +588,17 @@ SelectiveLevel SelectiveMesh::go_to(std::vector<char> wanted) {
 SelectiveLevel SelectiveMesh::adapt(const Viewpoint& view, LevelErrorKind kind) {
   const SelectiveRefiner::ViewTest test(*refiner_, view, kind);
   return move_to(test.wanted(), &test);
+}
+
+SelectiveMorph SelectiveMesh::morph_to(std::vector<char> wanted) {
+  refiner_->check_size(wanted);
+  refiner_->close(wanted);
+  return morph(wanted, nullptr);
+}
+
+SelectiveMorph SelectiveMesh::morph_to_view(const Viewpoint& view, LevelErrorKind kind) {
+  const SelectiveRefiner::ViewTest test(*refiner_, view, kind);
+  return morph(test.wanted(), &test);
 }
 
 }  // namespace lodkit
