@@ -1039,6 +1039,54 @@ TEST(CliPm, ExtractRefinesSelectivelyAlongAnEyePath) {
   EXPECT_NE(run(dir, common + "-o bad.ply --eye-path path.csv --eye 0,0,1").status, 0);  // one or the other
 }
 
+TEST(CliPm, ExtractBlendsEachViewInWithGeomorphsWhenAsked) {
+  // --morph-frames K: every K-th frame is the path's view, byte for byte; the frames between hold both
+  // views' connectivity and move every vertex on a straight line from the view before to the next.
+  test::ScratchDir dir("cli-pm-eye-path-morph");
+  ASSERT_EQ(run(dir, "terrain -o t.ply --levels 6").status, 0);
+  ASSERT_EQ(run(dir, "pm build t.ply -o t.pm --measure").status, 0);
+  test::write_text(dir / "path.csv", "-0.55,-0.55,0.1\n-0.45,-0.35,0.1\n0.9,0.9,0.3\n");
+  const std::string common = "pm extract t.pm --pixel-error 2 --viewport 200 --look-at 0.5,0.5,0 --eye-path path.csv ";
+  ASSERT_EQ(run(dir, common + "-o view.ply").status, 0);
+  const CliRun r = run(dir, common + "-o f.ply --morph-frames 4 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["views"].size(), 3u);
+  EXPECT_FALSE(j["views"][0].contains("morph_outputs"));
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(test::read_bytes(dir / fmt::format("f_{:03d}.ply", 4 * i)), test::read_bytes(dir / fmt::format("view_{:03d}.ply", i))) << i;
+  EXPECT_FALSE(std::filesystem::exists(dir / "f_009.ply"));
+  for (int step = 1; step < 3; ++step) {
+    const auto& v = j["views"][static_cast<std::size_t>(step)];
+    ASSERT_EQ(v["morph_outputs"].size(), 3u) << v.dump();
+    std::vector<Mesh> frames;
+    for (int k = 0; k < 3; ++k) {
+      const std::string name = fmt::format("f_{:03d}.ply", 4 * (step - 1) + 1 + k);
+      EXPECT_TRUE(v["morph_outputs"][static_cast<std::size_t>(k)].get<std::string>().ends_with(name));
+      frames.push_back(read_mesh(dir / name));
+    }
+    const Mesh before = read_mesh(dir / fmt::format("view_{:03d}.ply", step - 1)), after = read_mesh(dir / fmt::format("view_{:03d}.ply", step));
+    for (const Mesh& f : frames) {
+      EXPECT_EQ(f.triangles, frames[0].triangles);
+      EXPECT_EQ(f.num_vertices(), v["morph_vertices"].get<Index>());
+      EXPECT_GE(f.num_faces(), std::max(before.num_faces(), after.num_faces()));
+    }
+    // Straight lines, evenly paced: the middle frame is halfway between the other two.
+    EXPECT_LT((frames[1].positions - 0.5 * (frames[0].positions + frames[2].positions)).cwiseAbs().maxCoeff(), 1e-6);
+    EXPECT_GT((frames[2].positions - frames[0].positions).cwiseAbs().maxCoeff(), 1e-4);  // they do move
+  }
+  // Asked where it cannot blend: clear errors, nothing written.
+  for (const auto& [args, words] : std::vector<std::pair<std::string, std::string>>{
+           {"--morph-frames 4 --eye 0,0,1", "--morph-frames blends from view to view: it needs --eye-path"},
+           {"--morph-frames 4 --eye-path path.csv --fit-attributes", "--fit-attributes does not combine with --morph-frames"},
+           {"--morph-frames 0 --eye-path path.csv", "--morph-frames"}}) {
+    const CliRun b = run(dir, "pm extract t.pm --pixel-error 2 --look-at 0.5,0.5,0 -o bad.ply " + args);
+    EXPECT_NE(b.status, 0) << args;
+    EXPECT_NE(b.err.find(words), std::string::npos) << b.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad_000.ply") || std::filesystem::exists(dir / "bad.ply")) << args;
+  }
+}
+
 TEST(CliPm, ExtractFitsNormalsAndColoursWhenAsked) {
   // A level keeps each collapse's values; --fit-attributes fits them to the finest level's, as simplify
   // fits its output's: the same faces and positions, lower shading and colour errors, and in input order

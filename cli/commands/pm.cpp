@@ -40,6 +40,7 @@ struct PmCliOptions {
   std::optional<std::string> prove_with;  // extract: the mesh the stream was built from
   std::vector<double> eye, look_at;        // extract: selective refinement for this viewer
   std::optional<std::string> eye_path;     // extract: ... for each viewer of this file
+  int morph_frames = 1;                    // extract --eye-path: frames per step, the last the view itself
   double aspect = 16.0 / 9.0;
   bool no_cull = false, cull_backfaces = false;
   std::optional<Index> rows;
@@ -282,6 +283,9 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
   if (o.input_order) throw Error("pm extract: a selectively refined mesh is in stream order; --input-order does not combine with --eye");
   if (path && !o.eye.empty()) throw Error("pm extract: give --eye or --eye-path, not both");
   if (path && o.output == "-") throw Error("pm extract: --eye-path writes files OUT_000 ...: give OUT a file name");
+  if (o.morph_frames > 1 && !path) throw Error("pm extract: --morph-frames blends from view to view: it needs --eye-path");
+  if (o.morph_frames > 1 && o.fit_attributes)
+    throw Error("pm extract: --fit-attributes does not combine with --morph-frames (fitted values have no ancestors to blend from)");
   const auto start = std::chrono::steady_clock::now();
   const std::vector<PathView> lines = path ? read_eye_path(*o.eye_path) : std::vector<PathView>{{point_option(o.eye), {}, 0}};
   const PmReadResult r = read_pm_input(o.input);
@@ -314,12 +318,30 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
   nlohmann::json reports = nlohmann::json::array();
   Index fewest = std::numeric_limits<Index>::max(), most = 0, changed = 0;
   double widest = 0;
+  // With --morph-frames K, each step from one view to the next is K frames: K - 1 of the geomorph between
+  // them (alpha 1/K ... (K-1)/K), then the view itself.
+  const std::size_t per_step = static_cast<std::size_t>(o.morph_frames);
+  Mesh frame;
   for (std::size_t i = 0; i < viewers.size(); ++i) {
     const Viewpoint& view = viewers[i];
-    SelectiveLevel s = kept.adapt(view, kind);
+    std::vector<std::string> morph_outputs;
+    Index morph_vertices = 0;
+    SelectiveLevel s;
+    if (i > 0 && per_step > 1) {
+      SelectiveMorph m = kept.morph_to_view(view, kind);
+      for (std::size_t k = 1; k < per_step; ++k) {
+        m.geomorph.evaluate(double(k) / double(per_step), frame);
+        morph_outputs.push_back(numbered(o.output, (i - 1) * per_step + k));
+        write_output(frame, morph_outputs.back(), o.format, WriteOptions{}, inputs);
+      }
+      morph_vertices = m.geomorph.fine.mesh.num_vertices();
+      s = std::move(m.reached);
+    } else {
+      s = kept.adapt(view, kind);
+    }
     std::optional<AttributeFitReport> fit;
     if (finest) fit = fit_attributes_to_input(*finest, s.extracted.mesh);
-    const std::string output = path ? numbered(o.output, i) : o.output;
+    const std::string output = path ? numbered(o.output, i * per_step) : o.output;
     write_output(s.extracted.mesh, output, o.format, WriteOptions{}, inputs);
     // A uniform level within the same budget, for comparison: the one `--distance` would pick from here.
     const ScreenSpaceBudget uniform{view.pixel_error, (pm.bounds.center() - view.eye).norm(), view.fov_degrees, view.viewport_pixels};
@@ -342,6 +364,7 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
                      {"regions_facing_away", s.regions_facing_away},
                      {"uniform_level_faces", uniform_faces}};
     if (fit) j["attribute_fit"] = attribute_fit_json(*fit);
+    if (!morph_outputs.empty()) j["morph_outputs"] = morph_outputs, j["morph_vertices"] = morph_vertices;
     if (!path && !o.json && !global.quiet) {
       fmt::print(stderr,
                  "pm extract: selective refinement for the eye at ({}, {}, {}): {} faces, {} vertices, {} of {} splits; {} "
@@ -373,10 +396,12 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
   } else if (path && !global.quiet) {
     fmt::print(stderr,
                "pm extract: {} views along {}, one mesh kept from view to view: {} to {} faces, {:.1f} of {} splits applied or "
-               "undone per view after the first; {} projects to at most {:.3g} px in view (budget {} px); {} ... {} in {:.2f} s\n",
+               "undone per view after the first; {} projects to at most {:.3g} px in view (budget {} px); {}{} ... {} in {:.2f} s\n",
                viewers.size(), *o.eye_path, thousands(fewest), thousands(most),
                viewers.size() > 1 ? double(changed) / double(viewers.size() - 1) : 0.0, thousands(pm.max_level()), what, widest,
-               *o.pixel_error, numbered(o.output, 0), numbered(o.output, viewers.size() - 1), seconds);
+               *o.pixel_error,
+               per_step > 1 ? fmt::format("each change blended in over {} frames (geomorphs), views every {} frames: ", per_step, per_step) : "",
+               numbered(o.output, 0), numbered(o.output, (viewers.size() - 1) * per_step), seconds);
   }
   return 0;
 }
@@ -567,6 +592,10 @@ Examples:
                       "Selective refinement for each eye of this file, one per line (x,y,z, or x,y,z,lx,ly,lz with the "
                       "point looked at), written to OUT_000 ...; one mesh is kept from view to view")
       ->excludes("--distance");
+  extract->add_option("--morph-frames", opt->morph_frames,
+                      "With --eye-path: blend each view's change in over this many frames (geomorphs); the views are "
+                      "frames 0, K, 2K, ...")
+      ->check(in_range(1, 10000))->capture_default_str();
   extract->add_option("--look-at", opt->look_at, "With --eye: the point looked at, x,y,z (default: the bounding box centre)")
       ->delimiter(',')->expected(3);
   extract->add_option("--aspect", opt->aspect, "With --eye: viewport width over height")->check(kPositive)->capture_default_str();
@@ -591,7 +620,10 @@ With --eye, each region of the mesh is refined on its own (selective refinement)
 from the eye to the region, whose error is its measured deviation (its guaranteed bound with
 --certified); regions outside the view cone stay coarse unless --no-cull, and so do regions facing
 away with --cull-backfaces. --eye-path does so for each line of a file (a camera path), keeping one
-mesh from view to view: each view applies and undoes only the splits that change.
+mesh from view to view: each view applies and undoes only the splits that change. With
+--morph-frames K the change from one view to the next blends in over K frames (Hoppe 1997's
+geomorphs, refining and coarsening at once): K - 1 frames morph from the view before to the next,
+whose own mesh is the K-th, so views are frames 0, K, 2K, ... and nothing pops between frames.
 Only the blocks the chosen level needs are read (all of them with --input-order, --prove-with or
 --fit-attributes).
 Examples:
@@ -601,7 +633,8 @@ Examples:
   lodkit pm extract bunny.pm -o far.ply --pixel-error 0.5 --distance 2 --fov 45 --viewport 1440
   lodkit pm extract bunny.pm -o seen.ply --pixel-error 1 --distance 2 --prove-with bunny.ply
   lodkit pm extract terrain.pm -o view.ply --pixel-error 1 --eye -0.6,-0.6,0.1 --look-at 0.5,0.5,0
-  lodkit pm extract bunny.pm -o view.ply --pixel-error 1 --eye-path orbit.csv   # view_000.ply ...)");
+  lodkit pm extract bunny.pm -o view.ply --pixel-error 1 --eye-path orbit.csv   # view_000.ply ...
+  lodkit pm extract bunny.pm -o f.ply --pixel-error 1 --eye-path orbit.csv --morph-frames 8   # views f_000, f_008, ...)");
 
   CLI::App* morph = pm->add_subcommand("geomorph", "Blend between two levels (Hoppe's geomorphs)");
   morph->add_option("input", opt->input, "A .pm file, or - for stdin")->required();
