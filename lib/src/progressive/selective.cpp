@@ -20,6 +20,7 @@
 
 #include "core/geometry.h"
 #include "progressive/split_state.h"
+#include "progressive/view_test.h"
 
 namespace lodkit {
 namespace {
@@ -53,16 +54,6 @@ double farthest_from(const std::vector<Eigen::Vector3d>& points, const std::vect
 }
 
 constexpr std::size_t kMostSampledFaces = 64;
-
-// What a screen-space budget does not check itself (its field of view, viewport and pixel error are
-// checked where the budget is used).
-void check_view(const Viewpoint& v) {
-  auto fail = [](const std::string& what) { throw Error("selective refinement: " + what); };
-  if (!v.eye.allFinite() || !v.look_at.allFinite()) fail("the eye and the point looked at must be finite");
-  if (v.cull && !((v.look_at - v.eye).norm() > 0)) fail("the point looked at must differ from the eye");
-  if (!std::isfinite(v.viewport_pixels)) fail(fmt::format("viewport height must be positive, got {}", v.viewport_pixels));
-  if (!(v.aspect > 0) || !std::isfinite(v.aspect)) fail(fmt::format("aspect ratio must be positive, got {}", v.aspect));
-}
 
 // What walking the uniform sequence finds: each split's dependencies (CSR), the last earlier split of
 // its point, and its local deviation.
@@ -377,92 +368,6 @@ Index SelectiveRefiner::ancestor(Index wedge, const std::vector<char>& applied) 
   return wedge;
 }
 
-// A view's tests of a region: in the view cone, facing away, and the pixels its error projects to.
-struct SelectiveRefiner::ViewTest {
-  ViewTest(const SelectiveRefiner& refiner, const Viewpoint& view, LevelErrorKind by)
-      : r(refiner),
-        v(view),
-        kind(by),
-        error(by == LevelErrorKind::Bound ? refiner.error_ : refiner.deviation_),
-        reach_error(by == LevelErrorKind::Bound ? refiner.reach_bound_ : refiner.reach_deviation_) {
-    check_view(view);
-    // Pixels per unit of error one unit from the eye (projected_pixels() checks the budget); a region's
-    // error projects to that over its distance (error * H / (2 d tan(fov / 2))).
-    const ScreenSpaceBudget budget{view.pixel_error, 1.0, view.fov_degrees, view.viewport_pixels};
-    (void)object_error_for_pixels(0.0, budget);  // checks the pixel error
-    per_unit = projected_pixels(1.0, 0.0, budget);
-    const double tan_half = std::tan(0.5 * view.fov_degrees * std::numbers::pi / 180.0);
-    // The cone around the frustum: its half-angle reaches the viewport's corners.
-    const double cone = std::atan(tan_half * std::sqrt(1.0 + view.aspect * view.aspect));
-    cone_cos = std::cos(cone), cone_sin = std::sin(cone);
-    if (view.cull) axis = (view.look_at - view.eye).normalized();
-  }
-
-  // Where split j's region lies from the eye: the distance to its centre, the lower bound on the
-  // distance to the view cone (p cos - a sin; exact beside its side), and its normals' angle.
-  struct Seen {
-    double distance, off_cone, phi;
-  };
-  Seen seen(std::size_t j) const {
-    const Eigen::Vector3d d = r.centre_[j] - v.eye;
-    Seen s{d.norm(), -INFINITY, 0.0};
-    if (v.cull) {
-      const double along = d.dot(axis), across = (d - along * axis).norm();
-      s.off_cone = across * cone_cos - along * cone_sin;
-    }
-    if (v.cull_backfaces) s.phi = detail::direction_angle(r.cone_axis_[j], d);
-    return s;
-  }
-  // The tests of a ball of this radius around the centre, with the normals' cone and an error there.
-  // Each grows with the ball, so that of the ball holding every region below a split answers for all.
-  bool in_view(const Seen& s, double radius) const { return s.off_cone <= radius; }
-  // Facing away (Hoppe 1997, section 4.2): from every point of the ball, every normal of the cone
-  // points away from the eye. With u the eye to the centre and phi its angle to the cone's axis, the
-  // smallest (p - eye) . n is at least |u| cos(phi + half-angle) - radius. (A region's cone holds those
-  // below it.)
-  bool facing_away(const Seen& s, double radius, double half_angle) const {
-    return v.cull_backfaces && s.distance > 0 && half_angle >= 0 && s.phi + half_angle < 0.5 * std::numbers::pi &&
-           s.distance * std::cos(s.phi + half_angle) > radius;
-  }
-  double pixels(const Seen& s, double radius, double error_there) const {
-    const double d = s.distance - radius;
-    if (!(d > 0)) return error_there > 0 ? INFINITY : 0.0;
-    return error_there * per_unit / d;
-  }
-  bool needs(const Seen& s, double radius, double error_there, double half_angle) const {
-    return in_view(s, radius) && !facing_away(s, radius, half_angle) && pixels(s, radius, error_there) > v.pixel_error;
-  }
-  bool needs(std::size_t j) const { return needs(seen(j), r.radius_[j], error[j], r.cone_half_angle_[j]); }
-
-  // The splits whose regions need refining, and their dependencies: down the hierarchy from the base
-  // points, looking below a split only where a region there can need it (its reach, padded past
-  // rounding). In stream order, where what is looked at lies in memory.
-  std::vector<char> wanted() const {
-    const ProgressiveMesh& pm = *r.pm_;
-    const std::size_t n = pm.splits.size();
-    std::vector<char> out(n, 0), look(n, 0);
-    for (Index p = 0; p < pm.base_points; ++p)
-      if (const Index j = r.first_at_point_[static_cast<std::size_t>(p)]; j >= 0) look[static_cast<std::size_t>(j)] = 1;
-    for (std::size_t j = 0; j < n; ++j) {
-      if (!look[j]) continue;
-      const Seen s = seen(j);
-      out[j] = needs(s, r.radius_[j], error[j], r.cone_half_angle_[j]);
-      if (!out[j] && !needs(s, r.reach_radius_[j], reach_error[j], r.cone_half_angle_[j] + 1e-9)) continue;
-      for (Index k : r.below(static_cast<Index>(j)))
-        if (k >= 0) look[static_cast<std::size_t>(k)] = 1;
-    }
-    r.close(out);
-    return out;
-  }
-
-  const SelectiveRefiner& r;
-  const Viewpoint& v;
-  LevelErrorKind kind;
-  const std::vector<double>& error;
-  const std::vector<double>& reach_error;  // the largest at or below each split
-  double per_unit = 0, cone_cos = 1, cone_sin = 0;
-  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
-};
 
 std::vector<char> SelectiveRefiner::splits_for_view(const Viewpoint& view, LevelErrorKind kind) const {
   return ViewTest(*this, view, kind).wanted();
@@ -497,108 +402,6 @@ void SelectiveRefiner::report_view(const ViewTest& test, const std::vector<Index
 SelectiveLevel SelectiveRefiner::refine_for_view(const Viewpoint& view, LevelErrorKind kind) const {
   const ViewTest test(*this, view, kind);
   return apply_closed(test.wanted(), &test);
-}
-
-SelectiveMesh::SelectiveMesh(const SelectiveRefiner& refiner) : refiner_(&refiner) {
-  detail::SplitState base = detail::base_state(*refiner.pm_);
-  positions_ = std::move(base.positions);
-  attributes_ = std::move(base.attributes);
-  corners_ = std::move(base.corners);
-  applied_.assign(refiner.pm_->splits.size(), 0);
-}
-
-SelectiveMesh::Change SelectiveMesh::change_to(const std::vector<char>& wanted) const {
-  // A step's few splits (skipped eight at a time where none changes).
-  Change c;
-  const std::size_t n = applied_.size();
-  for (std::size_t j = 0; j < n; ++j) {
-    if ((j & 7) == 0 && j + 8 <= n && std::memcmp(applied_.data() + j, wanted.data() + j, 8) == 0) {
-      j += 7;
-      continue;
-    }
-    if (applied_[j] != wanted[j]) (applied_[j] ? c.undo : c.redo).push_back(static_cast<Index>(j));
-  }
-  return c;
-}
-
-// Undone from the last: a later split left applied depends on none of these (the set stays closed), so
-// each one's faces hold just what it wrote. New ones are applied in order, as refine() applies them.
-void SelectiveMesh::undo(const std::vector<Index>& splits) {
-  for (auto j = splits.rbegin(); j != splits.rend(); ++j) {
-    detail::apply_split(*refiner_->pm_, *j, false, positions_, attributes_, corners_);
-    applied_[static_cast<std::size_t>(*j)] = 0;
-  }
-}
-
-void SelectiveMesh::redo(const std::vector<Index>& splits) {
-  for (Index j : splits) {
-    detail::apply_split(*refiner_->pm_, j, true, positions_, attributes_, corners_);
-    applied_[static_cast<std::size_t>(j)] = 1;
-  }
-}
-
-SelectiveLevel SelectiveMesh::move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
-  const Change c = change_to(wanted);
-  undo(c.undo);
-  redo(c.redo);
-  SelectiveLevel out = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
-  out.splits_refined = static_cast<Index>(c.redo.size()), out.splits_coarsened = static_cast<Index>(c.undo.size());
-  return out;
-}
-
-SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
-  // Through the union of both sets (closed, as both are): its connectivity, with each vertex's ancestor
-  // in the set before (read from the arrays as they were) and in the new set (once it is reached).
-  const ProgressiveMesh& pm = *refiner_->pm_;
-  const Change c = change_to(wanted);
-  const std::vector<char> before = applied_;
-  const std::vector<Eigen::Vector3d> positions_before = positions_;
-  const std::vector<double> attributes_before = attributes_;
-  redo(c.redo);
-  SelectiveMorph out;
-  Geomorph& g = out.geomorph;
-  g.fine = refiner_->mesh_of(positions_, attributes_, corners_, applied_);
-  undo(c.undo);
-  out.reached = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
-  out.reached.splits_refined = static_cast<Index>(c.redo.size()), out.reached.splits_coarsened = static_cast<Index>(c.undo.size());
-  g.coarse_level = static_cast<Index>(std::count(before.begin(), before.end(), 1));
-  g.fine_level = out.reached.splits_applied;
-
-  Mesh& end = g.fine.mesh;
-  Mesh start;
-  detail::size_level_mesh(pm, end.num_vertices(), 0, start);
-  for (Index row = 0; row < end.num_vertices(); ++row) {
-    const Index w = g.fine.vertex_wedge[static_cast<std::size_t>(row)];
-    detail::put_wedge(pm, positions_before, attributes_before, refiner_->ancestor(w, before), start, row);
-    detail::put_wedge(pm, positions_, attributes_, refiner_->ancestor(w, applied_), end, row);
-  }
-  g.start_positions = std::move(start.positions);
-  g.start_normals = std::move(start.attributes.normals);
-  g.start_uvs = std::move(start.attributes.uvs);
-  g.start_colours = std::move(start.attributes.colours);
-  return out;
-}
-
-SelectiveLevel SelectiveMesh::go_to(std::vector<char> wanted) {
-  refiner_->check_size(wanted);
-  refiner_->close(wanted);
-  return move_to(wanted, nullptr);
-}
-
-SelectiveLevel SelectiveMesh::adapt(const Viewpoint& view, LevelErrorKind kind) {
-  const SelectiveRefiner::ViewTest test(*refiner_, view, kind);
-  return move_to(test.wanted(), &test);
-}
-
-SelectiveMorph SelectiveMesh::morph_to(std::vector<char> wanted) {
-  refiner_->check_size(wanted);
-  refiner_->close(wanted);
-  return morph(wanted, nullptr);
-}
-
-SelectiveMorph SelectiveMesh::morph_to_view(const Viewpoint& view, LevelErrorKind kind) {
-  const SelectiveRefiner::ViewTest test(*refiner_, view, kind);
-  return morph(test.wanted(), &test);
 }
 
 }  // namespace lodkit
