@@ -1,8 +1,8 @@
 // libFuzzer target: a .pm stream's bytes. Reading must return what survives or throw lodkit::Error;
 // the levels it returns must extract, geomorph and refine selectively (for a view culling back
 // faces, and for every other split) without a crash or a sanitizer report, each vertex index in range;
-// the view's splits found down the hierarchy must be those of testing every region, and a kept mesh
-// moved from one set to the other must give the same meshes.
+// the view's splits found down the hierarchy must be those of testing every region, a kept mesh
+// moved from one set to the other must give the same meshes, and so must a geomorph between them.
 #include <lodkit/error.h>
 #include <lodkit/pm_io.h>
 #include <lodkit/progressive.h>
@@ -50,6 +50,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (moved.extracted.mesh.triangles != seen.extracted.mesh.triangles ||
         moved.extracted.mesh.positions != seen.extracted.mesh.positions)
       __builtin_trap();
+    // A geomorph back to the other set: it reaches that set's mesh, and its faces index its vertices.
+    const SelectiveMorph back = kept.morph_to(every_other);
+    if (back.reached.extracted.mesh.triangles != half.extracted.mesh.triangles ||
+        back.reached.extracted.mesh.positions != half.extracted.mesh.positions)
+      __builtin_trap();
+    const Mesh& joint = back.geomorph.fine.mesh;
+    if (back.geomorph.start_positions.rows() != joint.num_vertices()) __builtin_trap();
+    for (Index f = 0; f < joint.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k)
+        if (joint.triangles(f, k) < 0 || joint.triangles(f, k) >= joint.num_vertices()) __builtin_trap();
+    (void)back.geomorph.at(0.5);
   } catch (const Error&) {
   }
   return 0;
