@@ -58,30 +58,60 @@ SelectiveLevel SelectiveMesh::move_to(const std::vector<char>& wanted, const Sel
 
 SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
   // Through the union of both sets (closed, as both are): its connectivity, with each vertex's ancestor
-  // in the set before (read from the arrays as they were) and in the new set (once it is reached).
+  // in the set before and in the new set. The new splits write only their points' positions and the
+  // values of the wedges they change: kept aside, those give the state before without a copy of it.
   const ProgressiveMesh& pm = *refiner_->pm_;
+  const std::size_t dims = static_cast<std::size_t>(pm.attribute_dims);
   const Change c = change_to(wanted);
-  const std::vector<char> before = applied_;
-  const std::vector<Eigen::Vector3d> positions_before = positions_;
-  const std::vector<double> attributes_before = attributes_;
+  std::vector<Index> points, wedges;
+  for (Index j : c.redo) {
+    const VertexSplit& split = pm.splits[static_cast<std::size_t>(j)];
+    points.push_back(split.point);
+    for (Index i = 0; i < split.num_attribute_changes; ++i)
+      wedges.push_back(pm.attribute_changes[static_cast<std::size_t>(split.first_attribute_change + i)].wedge);
+  }
+  for (auto* list : {&points, &wedges}) {
+    std::sort(list->begin(), list->end());
+    list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
+  std::vector<Eigen::Vector3d> other_positions(points.size());
+  std::vector<double> other_values(dims * wedges.size());
+  // Swaps the kept values with the state's: the state before the new splits and after them.
+  auto swap_kept = [&] {
+    for (std::size_t i = 0; i < points.size(); ++i) std::swap(other_positions[i], positions_[static_cast<std::size_t>(points[i])]);
+    for (std::size_t i = 0; i < wedges.size(); ++i)
+      std::swap_ranges(other_values.begin() + static_cast<std::ptrdiff_t>(dims * i), other_values.begin() + static_cast<std::ptrdiff_t>(dims * (i + 1)),
+                       attributes_.begin() + static_cast<std::ptrdiff_t>(dims * static_cast<std::size_t>(wedges[i])));
+  };
+  for (std::size_t i = 0; i < points.size(); ++i) other_positions[i] = positions_[static_cast<std::size_t>(points[i])];
+  for (std::size_t i = 0; i < wedges.size(); ++i)
+    std::copy_n(attributes_.begin() + static_cast<std::ptrdiff_t>(dims * static_cast<std::size_t>(wedges[i])), dims,
+                other_values.begin() + static_cast<std::ptrdiff_t>(dims * i));
   redo(c.redo);
   SelectiveMorph out;
   Geomorph& g = out.geomorph;
   g.fine = refiner_->mesh_of(positions_, attributes_, corners_, applied_);
-  undo(c.undo);
-  out.reached = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
-  out.reached.splits_refined = static_cast<Index>(c.redo.size()), out.reached.splits_coarsened = static_cast<Index>(c.undo.size());
-  g.coarse_level = static_cast<Index>(std::count(before.begin(), before.end(), 1));
-  g.fine_level = out.reached.splits_applied;
-
   Mesh& end = g.fine.mesh;
   Mesh start;
   detail::size_level_mesh(pm, end.num_vertices(), 0, start);
+  // The state before, for a moment: its values and flags back where the new splits wrote.
+  swap_kept();
+  for (Index j : c.redo) applied_[static_cast<std::size_t>(j)] = 0;
   for (Index row = 0; row < end.num_vertices(); ++row) {
     const Index w = g.fine.vertex_wedge[static_cast<std::size_t>(row)];
-    detail::put_wedge(pm, positions_before, attributes_before, refiner_->ancestor(w, before), start, row);
+    detail::put_wedge(pm, positions_, attributes_, refiner_->ancestor(w, applied_), start, row);
+  }
+  g.coarse_level = static_cast<Index>(std::count(applied_.begin(), applied_.end(), 1));
+  for (Index j : c.redo) applied_[static_cast<std::size_t>(j)] = 1;
+  swap_kept();
+  undo(c.undo);
+  for (Index row = 0; row < end.num_vertices(); ++row) {
+    const Index w = g.fine.vertex_wedge[static_cast<std::size_t>(row)];
     detail::put_wedge(pm, positions_, attributes_, refiner_->ancestor(w, applied_), end, row);
   }
+  out.reached = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
+  out.reached.splits_refined = static_cast<Index>(c.redo.size()), out.reached.splits_coarsened = static_cast<Index>(c.undo.size());
+  g.fine_level = out.reached.splits_applied;
   g.start_positions = std::move(start.positions);
   g.start_normals = std::move(start.attributes.normals);
   g.start_uvs = std::move(start.attributes.uvs);
