@@ -106,6 +106,34 @@ TEST(SelectiveRefinement, EveryClosedSetGivesAValidMeshWithTheInputsTopology) {
   }
 }
 
+TEST(SelectiveRefinement, VerticesNameTheirInputVertexWhenTheStreamKnowsIt) {
+  // Built in memory, a stream knows the input's numbering: each vertex of a selective mesh (and of a
+  // level in stream order) names the input vertex it stands for, as simplify() does. With every split
+  // applied, that vertex is where the input's is.
+  const Mesh input = test::seamed_uv_sphere();
+  const ProgressiveMesh pm = build_progressive_mesh(input);
+  ASSERT_TRUE(pm.knows_input_order());
+  const SelectiveRefiner refiner(pm);
+  std::vector<char> some(pm.splits.size(), 0);
+  for (std::size_t j = 0; j < some.size(); j += 5) some[j] = 1;
+  for (const ExtractedLevel& e : {refiner.refine(some).extracted, refiner.refine(std::vector<char>(pm.splits.size(), 1)).extracted,
+                                  extract_level(pm, pm.max_level() / 2, VertexOrder::Stream)}) {
+    ASSERT_EQ(e.vertex_origin.size(), static_cast<std::size_t>(e.mesh.num_vertices()));
+    for (std::size_t v = 0; v < e.vertex_origin.size(); ++v)
+      ASSERT_EQ(e.vertex_origin[v], pm.wedge_input[static_cast<std::size_t>(e.vertex_wedge[v])]);
+  }
+  const ExtractedLevel all = refiner.refine(std::vector<char>(pm.splits.size(), 1)).extracted;
+  for (Index v = 0; v < all.mesh.num_vertices(); ++v)
+    ASSERT_EQ(all.mesh.positions.row(v), input.positions.row(all.vertex_origin[static_cast<std::size_t>(v)])) << v;
+  // A stream without the numbering (quantised, not --keep-order): the wedge, as documented.
+  PmWriteOptions w;
+  w.position_bits = 14;
+  const ProgressiveMesh read = read_pm_from_memory(write_pm_to_memory(pm, w), "q.pm").pm;
+  ASSERT_FALSE(read.knows_input_order());
+  const ExtractedLevel q = SelectiveRefiner(read).refine(some).extracted;
+  EXPECT_EQ(q.vertex_origin, q.vertex_wedge);
+}
+
 TEST(SelectiveRefinement, TheErrorBoundHoldsAgainstTheFinestLevel) {
   std::mt19937 rng(5);
   for (const Mesh& input : {test::bumpy_sphere(3, 0.08), small_terrain(5)}) {

@@ -82,7 +82,7 @@ ExtractedLevel PMCursor::extract(VertexOrder order) const {
   auto put_vertex = [&](Index row, Index w) {
     row_of[static_cast<std::size_t>(w)] = row;
     out.vertex_wedge[static_cast<std::size_t>(row)] = w;
-    out.vertex_origin[static_cast<std::size_t>(row)] = input_order ? pm.wedge_input[static_cast<std::size_t>(w)] : w;
+    out.vertex_origin[static_cast<std::size_t>(row)] = pm.knows_input_order() ? pm.wedge_input[static_cast<std::size_t>(w)] : w;
     detail::put_wedge(pm, positions_, attributes_, w, m, row);
   };
   if (whole_input) {

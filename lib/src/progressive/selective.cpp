@@ -350,6 +350,8 @@ ExtractedLevel SelectiveRefiner::mesh_of(const std::vector<Eigen::Vector3d>& pos
   Mesh& m = e.mesh;
   detail::size_level_mesh(pm, nv, nf, m);
   e.vertex_origin = e.vertex_wedge;
+  if (pm.knows_input_order())
+    for (Index& origin : e.vertex_origin) origin = pm.wedge_input[static_cast<std::size_t>(origin)];
   for (Index row = 0; row < nv; ++row) {
     const Index w = e.vertex_wedge[static_cast<std::size_t>(row)];
     detail::put_wedge(pm, positions, attributes, w, m, row);
