@@ -645,7 +645,9 @@ Examples:
   morph->add_option("-o,--output", opt->output, "Output mesh (or frame name pattern)")->required();
   morph->add_option("--format", opt->format, "Format of stdout")->check(format_validator());
   morph->add_flag("--input-order", opt->input_order, "Vertices and faces in input order");
-  morph->footer(R"(Examples:
+  morph->footer(R"(Between two uniform levels. Between selectively refined views along a camera path:
+pm extract --eye-path FILE --morph-frames K.
+Examples:
   lodkit pm geomorph bunny.pm --from 1000 --to 4000 --alpha 0.5 -o half.ply
   lodkit pm geomorph bunny.pm --from 1000 --to 4000 --frames 30 -o morph.ply   # morph_000.ply ... morph_029.ply)");
 
