@@ -454,6 +454,97 @@ TEST(SelectiveMesh, FollowsAMovingViewerChangingOnlyWhatTheViewChanges) {
   EXPECT_LT(changed, held / 20) << changed << " splits changed, " << held << " held";
 }
 
+// A renderer's copy of a kept mesh: a slot per wedge and per face of the stream, filled from the mesh's
+// state, and the mesh those buffers draw (shown faces by number, the wedges they use by number).
+struct Buffers {
+  const ProgressiveMesh& pm;
+  std::vector<Eigen::Vector3d> position;
+  std::vector<double> values;
+  std::vector<std::array<Index, 3>> corners;
+  std::vector<char> shown;
+
+  Buffers(const ProgressiveMesh& p, const SelectiveMesh& m)
+      : pm(p), position(p.wedge_point.size()), values(p.wedge_point.size() * std::size_t(p.attribute_dims)),
+        corners(p.face_corners.size()), shown(p.face_corners.size()) {
+    for (Index w = 0; w < Index(position.size()); ++w) upload_wedge(m, w);
+    for (Index f = 0; f < Index(corners.size()); ++f) upload_face(m, f);
+  }
+  void upload_wedge(const SelectiveMesh& m, Index w) {
+    position[std::size_t(w)] = m.wedge_position(w);
+    const std::span<const double> v = m.wedge_values(w);
+    std::copy(v.begin(), v.end(), values.begin() + std::ptrdiff_t(v.size()) * w);
+  }
+  void upload_face(const SelectiveMesh& m, Index f) {
+    shown[std::size_t(f)] = m.face_shown(f);
+    for (int k = 0; k < 3; ++k) corners[std::size_t(f)][std::size_t(k)] = m.face_corner(f, k);
+  }
+  Mesh draw() const {
+    std::vector<Index> row(position.size(), -1), wedges;
+    for (std::size_t f = 0; f < corners.size(); ++f)
+      if (shown[f])
+        for (Index w : corners[f]) row[std::size_t(w)] = 0;
+    for (std::size_t w = 0; w < row.size(); ++w)
+      if (row[w] == 0) row[w] = Index(wedges.size()), wedges.push_back(Index(w));
+    Mesh m;
+    m.positions.resize(Index(wedges.size()), 3);
+    if (pm.has_normals) m.attributes.normals.resize(Index(wedges.size()), 3);
+    if (pm.has_uvs) m.attributes.uvs.resize(Index(wedges.size()), 2);
+    if (pm.has_colours) m.attributes.colours.resize(Index(wedges.size()), 4);
+    for (Index i = 0; i < Index(wedges.size()); ++i) {
+      const std::size_t w = std::size_t(wedges[std::size_t(i)]);
+      m.positions.row(i) = position[w].transpose();
+      const double* v = values.data() + w * std::size_t(pm.attribute_dims);
+      if (pm.has_normals) for (int d = 0; d < 3; ++d) m.attributes.normals(i, d) = *v++;
+      if (pm.has_uvs) for (int d = 0; d < 2; ++d) m.attributes.uvs(i, d) = *v++;
+      if (pm.has_colours) for (int d = 0; d < 4; ++d) m.attributes.colours(i, d) = float(*v++);
+    }
+    std::vector<std::size_t> faces;
+    for (std::size_t f = 0; f < corners.size(); ++f)
+      if (shown[f]) faces.push_back(f);
+    m.triangles.resize(Index(faces.size()), 3);
+    if (pm.has_face_colours) m.attributes.face_colours.resize(Index(faces.size()), 4);
+    for (Index i = 0; i < Index(faces.size()); ++i) {
+      for (int k = 0; k < 3; ++k) m.triangles(i, k) = row[std::size_t(corners[faces[std::size_t(i)]][std::size_t(k)])];
+      if (pm.has_face_colours) m.attributes.face_colours.row(i) = pm.face_colours.row(Index(faces[std::size_t(i)]));
+    }
+    return m;
+  }
+};
+
+TEST(SelectiveMesh, StepsNameEverySlotTheyChange) {
+  // A renderer's buffers, filled once and then only where a step says: after every step they draw the
+  // mesh refine() gives for the set, bit for bit, and a small step names few slots.
+  std::mt19937 rng(31);
+  for (const Mesh& input : inputs()) {
+    const ProgressiveMesh pm = build_progressive_mesh(input);
+    const SelectiveRefiner refiner(pm);
+    const std::size_t n = pm.splits.size();
+    SelectiveMesh mesh(refiner);
+    Buffers buffers(pm, mesh);
+    for (int step = 0; step < 12; ++step) {
+      std::vector<char> wanted(n, step == 10 ? 1 : 0);
+      if (step < 10) {
+        std::bernoulli_distribution pick(std::array{0.001, 0.01, 0.05, 0.2, 0.5}[step % 5]);
+        for (char& w : wanted) w = pick(rng);
+      }
+      const std::vector<char> before = mesh.applied();
+      const SelectiveChanges c = mesh.step_to(wanted);
+      for (Index w : c.wedges) buffers.upload_wedge(mesh, w);
+      for (Index f : c.faces) buffers.upload_face(mesh, f);
+      const std::string what = fmt::format("{} faces, step {}", input.num_faces(), step);
+      expect_identical(buffers.draw(), refiner.refine(wanted).extracted.mesh, what);
+      Index refined = 0, coarsened = 0;
+      for (std::size_t j = 0; j < n; ++j) refined += !before[j] && mesh.applied()[j], coarsened += before[j] && !mesh.applied()[j];
+      EXPECT_EQ(c.splits_refined, refined) << what;
+      EXPECT_EQ(c.splits_coarsened, coarsened) << what;
+      EXPECT_TRUE(std::is_sorted(c.wedges.begin(), c.wedges.end()) && std::is_sorted(c.faces.begin(), c.faces.end())) << what;
+      if (refined + coarsened < Index(n) / 20) {
+        EXPECT_LT(c.faces.size(), pm.face_corners.size() / 4) << what;
+      }
+    }
+  }
+}
+
 // A mesh's faces with area as comparable rows: per corner its position and attribute values, each face
 // turned to start at its least corner, the faces sorted. Faces with two corners at one place are left
 // out and counted.

@@ -379,6 +379,8 @@ class SelectiveRefiner {
   std::vector<Index> next_at_point_;   // per split: the next split of its point, or -1
   std::vector<Index> first_at_point_;  // per point: its first split, or -1
   std::vector<Index> wedge_split_;     // per wedge: the split that makes it, or -1 (the base's)
+  std::vector<Index> face_split_;      // per face: the split that opens it, or -1 (the base's)
+  std::vector<Index> point_wedge_start_, point_wedges_;  // CSR: each point's wedges
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_, deviation_;
   double beyond_bound_ = 0, beyond_deviation_ = 0;  // the last level's bound and measured error (0 when it is the input)
@@ -390,8 +392,8 @@ class SelectiveRefiner {
   std::vector<double> reach_radius_, reach_bound_, reach_deviation_;
 };
 
-/// A change of a SelectiveMesh's state as a geomorph (Hoppe 1997, section 5), so that a viewer sees it
-/// blend in over a few frames instead of popping: the connectivity of both states' splits together,
+/// A change of a SelectiveMesh's state as a geomorph (Hoppe 1997, view-dependent refinement), so that
+/// a viewer sees it blend in over a few frames instead of popping: both states' splits' connectivity,
 /// every vertex moving from its ancestor's place and attributes in the state before (at alpha 0 the
 /// mesh looks exactly like that state: the faces only the new splits make have no area) to those in
 /// the new state (alpha 1 looks exactly like it: the faces only the splits undone make have none).
@@ -402,6 +404,16 @@ struct SelectiveMorph {
   Geomorph geomorph;
   /// The new state, as go_to() and adapt() report it: the mesh to show once the morph is over.
   SelectiveLevel reached;
+};
+
+/// What a step of a SelectiveMesh changed, for a renderer that keeps the mesh in buffers of its own with
+/// a slot per wedge and per face of the whole stream (pm.wedge_point.size() and pm.face_corners.size()):
+/// upload these slots again from wedge_position(), wedge_values(), face_shown() and face_corner(). A step
+/// then costs what changes and a pass over the per-split flags, not the mesh shown.
+struct SelectiveChanges {
+  std::vector<Index> wedges;  ///< wedges that appeared, or whose point moved or values changed (ascending)
+  std::vector<Index> faces;   ///< faces that appeared or went, or whose corners changed (ascending)
+  Index splits_refined = 0, splits_coarsened = 0;
 };
 
 /// A selectively refined mesh kept from view to view (Hoppe 1997): moving to another set of splits
@@ -422,8 +434,16 @@ class SelectiveMesh {
   /// As go_to() and adapt(), with the change as a geomorph from the state before to the new one.
   SelectiveMorph morph_to(std::vector<char> wanted);
   SelectiveMorph morph_to_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound);
+  /// As go_to() and adapt(), without making the mesh: what changed, slot by slot.
+  SelectiveChanges step_to(std::vector<char> wanted);
+  SelectiveChanges step_to_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound);
   /// Per split, whether it is applied now.
   const std::vector<char>& applied() const { return applied_; }
+  /// The state slot by slot, for any wedge or face of the stream (a slot not shown holds stale values).
+  bool face_shown(Index face) const;
+  Index face_corner(Index face, int k) const { return corners_[3 * static_cast<std::size_t>(face) + static_cast<std::size_t>(k)]; }
+  const Eigen::Vector3d& wedge_position(Index wedge) const;
+  std::span<const double> wedge_values(Index wedge) const;  ///< attribute_dims values
 
  private:
   struct Change {
@@ -434,6 +454,7 @@ class SelectiveMesh {
   void redo(const std::vector<Index>& splits);  // in order
   SelectiveLevel move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view);  // wanted is closed
   SelectiveMorph morph(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view);    // wanted is closed
+  SelectiveChanges step(const std::vector<char>& wanted);                                           // wanted is closed
 
   const SelectiveRefiner* refiner_;
   std::vector<Eigen::Vector3d> positions_;

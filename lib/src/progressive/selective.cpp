@@ -218,9 +218,20 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
     if (const Index previous = walk.previous_at_point[j]; previous >= 0) next_at_point_[static_cast<std::size_t>(previous)] = static_cast<Index>(j);
     first_at_point_[static_cast<std::size_t>(pm.splits[j].point)] = static_cast<Index>(j);
   }
+  // Which split makes each wedge and opens each face, and each point's wedges (for kept meshes).
   wedge_split_.assign(pm.wedge_point.size(), -1);
-  for (std::size_t j = 0; j < n; ++j)
+  face_split_.assign(pm.face_corners.size(), -1);
+  for (std::size_t j = 0; j < n; ++j) {
     std::fill_n(wedge_split_.begin() + pm.splits[j].first_wedge, pm.splits[j].num_wedges, static_cast<Index>(j));
+    std::fill_n(face_split_.begin() + pm.splits[j].first_face, pm.splits[j].num_faces, static_cast<Index>(j));
+  }
+  point_wedge_start_.assign(points + 1, 0);
+  for (Index p : pm.wedge_point) ++point_wedge_start_[static_cast<std::size_t>(p) + 1];
+  for (std::size_t p = 0; p < points; ++p) point_wedge_start_[p + 1] += point_wedge_start_[p];
+  point_wedges_.resize(pm.wedge_point.size());
+  std::vector<Index> next(point_wedge_start_.begin(), point_wedge_start_.end() - 1);
+  for (std::size_t w = 0; w < pm.wedge_point.size(); ++w)
+    point_wedges_[static_cast<std::size_t>(next[static_cast<std::size_t>(pm.wedge_point[w])]++)] = static_cast<Index>(w);
   deviation_.resize(n);
   std::vector<detail::NormalCone>& cone = walk.cone;
   for (std::size_t j = n; j-- > 0;) {

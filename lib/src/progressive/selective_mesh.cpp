@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <span>
 
 #include "progressive/split_state.h"
 #include "progressive/view_test.h"
@@ -119,6 +120,50 @@ SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const Selec
   return out;
 }
 
+SelectiveChanges SelectiveMesh::step(const std::vector<char>& wanted) {
+  // Each split, either way, writes its point's position (so every wedge of the point), the new point's
+  // wedges, the values of the wedges it changes, its new faces and the faces whose corners it moves.
+  const SelectiveRefiner& r = *refiner_;
+  const ProgressiveMesh& pm = *r.pm_;
+  const Change c = change_to(wanted);
+  undo(c.undo);
+  redo(c.redo);
+  SelectiveChanges out;
+  out.splits_refined = static_cast<Index>(c.redo.size()), out.splits_coarsened = static_cast<Index>(c.undo.size());
+  for (const std::vector<Index>* splits : {&c.undo, &c.redo})
+    for (Index j : *splits) {
+      const VertexSplit& split = pm.splits[static_cast<std::size_t>(j)];
+      const std::size_t point = static_cast<std::size_t>(split.point);
+      out.wedges.insert(out.wedges.end(), r.point_wedges_.begin() + r.point_wedge_start_[point],
+                        r.point_wedges_.begin() + r.point_wedge_start_[point + 1]);
+      for (Index w = split.first_wedge; w < split.first_wedge + split.num_wedges; ++w) out.wedges.push_back(w);
+      for (Index i = 0; i < split.num_attribute_changes; ++i)
+        out.wedges.push_back(pm.attribute_changes[static_cast<std::size_t>(split.first_attribute_change + i)].wedge);
+      for (Index f = split.first_face; f < split.first_face + split.num_faces; ++f) out.faces.push_back(f);
+      for (Index i = 0; i < split.num_changes; ++i)
+        out.faces.push_back(pm.corner_changes[static_cast<std::size_t>(split.first_change + i)].corner / 3);
+    }
+  for (std::vector<Index>* list : {&out.wedges, &out.faces}) {
+    std::sort(list->begin(), list->end());
+    list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
+  return out;
+}
+
+bool SelectiveMesh::face_shown(Index face) const {
+  const Index j = refiner_->face_split_[static_cast<std::size_t>(face)];
+  return j < 0 || applied_[static_cast<std::size_t>(j)];
+}
+
+const Eigen::Vector3d& SelectiveMesh::wedge_position(Index wedge) const {
+  return positions_[static_cast<std::size_t>(refiner_->pm_->wedge_point[static_cast<std::size_t>(wedge)])];
+}
+
+std::span<const double> SelectiveMesh::wedge_values(Index wedge) const {
+  const std::size_t dims = static_cast<std::size_t>(refiner_->pm_->attribute_dims);
+  return {attributes_.data() + dims * static_cast<std::size_t>(wedge), dims};
+}
+
 SelectiveLevel SelectiveMesh::go_to(std::vector<char> wanted) {
   refiner_->check_size(wanted);
   refiner_->close(wanted);
@@ -134,6 +179,16 @@ SelectiveMorph SelectiveMesh::morph_to(std::vector<char> wanted) {
   refiner_->check_size(wanted);
   refiner_->close(wanted);
   return morph(wanted, nullptr);
+}
+
+SelectiveChanges SelectiveMesh::step_to(std::vector<char> wanted) {
+  refiner_->check_size(wanted);
+  refiner_->close(wanted);
+  return step(wanted);
+}
+
+SelectiveChanges SelectiveMesh::step_to_view(const Viewpoint& view, LevelErrorKind kind) {
+  return step(SelectiveRefiner::ViewTest(*refiner_, view, kind).wanted());
 }
 
 SelectiveMorph SelectiveMesh::morph_to_view(const Viewpoint& view, LevelErrorKind kind) {
