@@ -1,7 +1,8 @@
 // A viewer moving along a path: the time per view of selective refinement from the base
 // (SelectiveRefiner::refine_for_view) against a mesh kept from view to view (SelectiveMesh::adapt) and
-// one that makes each step a geomorph (SelectiveMesh::morph_to_view), how many splits each step
-// changes, and how far the surface jumps between frames with and without the geomorphs.
+// one that makes each step a geomorph (SelectiveMesh::morph_to_view) or only names the slots that change
+// (SelectiveMesh::step_to_view), how many splits each step changes, and how far the surface jumps
+// between frames with and without the geomorphs.
 // Usage: lodkit_bench_selective_path MESH...
 #include <lodkit/io.h>
 #include <lodkit/metrics.h>
@@ -25,16 +26,17 @@ constexpr const char* kUsage =
     "Builds each mesh's progressive mesh (with measured levels) and prints CSV on stdout: per path (an\n"
     "orbit at 1.5 bounding radii, 0.5 deg per view; a dolly from 4 to 1.2 radii, 0.5 % of the distance\n"
     "per view; 240 views each, looking at the centre, 60 deg, 1080 px, 1 px by measured deviation), the\n"
-    "mean milliseconds per view from the base, kept, and kept as a geomorph from the view before (the\n"
-    "morph's mesh and the view's), the mean splits applied and undone per view when kept, the mean\n"
+    "mean milliseconds per view from the base, kept, kept as a geomorph from the view before (the\n"
+    "morph's mesh and the view's), and kept naming the slots that change (no mesh made), with the mean\n"
+    "wedge and face slots named per view, the mean splits applied and undone per view when kept, the mean\n"
     "splits applied, faces, and vertices of the morph. Every 24th step, the surface's jump (Hausdorff\n"
     "distance, % of the diagonal) from the view before: at once, and the largest of 4 frames' with the\n"
     "morph. Each kept and morphed view is checked against the fresh one.\n"
     "Example: build/bench/lodkit_bench_selective_path ../shared/models/scans/stanford_bunny_zipper.ply\n";
 
 int run(int argc, char** argv) {
-  fmt::print("mesh,faces,splits,path,views,fresh_ms,kept_ms,morph_ms,changed_per_view,splits_applied,view_faces,"
-             "morph_vertices,jump_pct,morph_frame_jump_pct\n");
+  fmt::print("mesh,faces,splits,path,views,fresh_ms,kept_ms,morph_ms,step_ms,slots_per_view,changed_per_view,splits_applied,"
+             "view_faces,morph_vertices,jump_pct,morph_frame_jump_pct\n");
   constexpr int kViews = 240, kJumpEvery = 24, kFrames = 4;
   for (int i = 1; i < argc; ++i) {
     const std::string path = argv[i];
@@ -53,8 +55,8 @@ int run(int argc, char** argv) {
     };
     auto dolly = [&](int v) -> Eigen::Vector3d { return centre + std::max(1.2, 4.0 * std::pow(0.995, v)) * radius * side; };
     for (const auto& [name, eye_at] : {std::pair<const char*, std::function<Eigen::Vector3d(int)>>{"orbit", orbit}, {"dolly", dolly}}) {
-      SelectiveMesh kept(refiner), morphing(refiner);
-      double fresh_ms = 0, kept_ms = 0, morph_ms = 0, changed = 0, applied = 0, faces = 0, morph_vertices = 0;
+      SelectiveMesh kept(refiner), morphing(refiner), stepping(refiner);
+      double fresh_ms = 0, kept_ms = 0, morph_ms = 0, step_ms = 0, slots = 0, changed = 0, applied = 0, faces = 0, morph_vertices = 0;
       double jump = 0, frame_jump = 0;
       Mesh before;
       for (int v = 0; v < kViews; ++v) {
@@ -70,6 +72,11 @@ int run(int argc, char** argv) {
         t = std::chrono::steady_clock::now();
         const SelectiveMorph m = morphing.morph_to_view(view, LevelErrorKind::Measured);
         morph_ms += 1000 * seconds_since(t);
+        t = std::chrono::steady_clock::now();
+        const SelectiveChanges c = stepping.step_to_view(view, LevelErrorKind::Measured);
+        step_ms += 1000 * seconds_since(t);
+        if (stepping.applied() != kept.applied()) throw std::runtime_error(fmt::format("{}: view {} of the {} differs stepped", path, v, name));
+        if (v > 0) slots += double(c.wedges.size() + c.faces.size());
         for (const SelectiveLevel* other : {&b, &m.reached})
           if (a.extracted.mesh.triangles != other->extracted.mesh.triangles || a.extracted.mesh.positions != other->extracted.mesh.positions)
             throw std::runtime_error(fmt::format("{}: view {} of the {} differs kept", path, v, name));
@@ -90,8 +97,9 @@ int run(int argc, char** argv) {
         faces += double(b.extracted.mesh.num_faces());
       }
       const double diagonal = pm.bounds.diagonal().norm();
-      fmt::print("{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.1f},{:.0f},{:.0f},{:.0f},{:.5f},{:.5f}\n", path, mesh.num_faces(),
-                 pm.splits.size(), name, kViews, fresh_ms / kViews, kept_ms / kViews, morph_ms / kViews, changed / (kViews - 1),
+      fmt::print("{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{:.1f},{:.0f},{:.0f},{:.0f},{:.5f},{:.5f}\n", path,
+                 mesh.num_faces(), pm.splits.size(), name, kViews, fresh_ms / kViews, kept_ms / kViews, morph_ms / kViews,
+                 step_ms / kViews, slots / (kViews - 1), changed / (kViews - 1),
                  applied / kViews, faces / kViews, morph_vertices / kViews, 100 * jump / diagonal, 100 * frame_jump / diagonal);
     }
   }
