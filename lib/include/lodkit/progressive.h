@@ -449,6 +449,7 @@ class SelectiveMesh {
   struct Change {
     std::vector<Index> undo, redo;  // the splits applied now and not wanted, and the reverse, in order
   };
+  std::vector<char> closed(std::vector<char> wanted) const;  // checked, with every dependency
   Change change_to(const std::vector<char>& wanted) const;
   void undo(const std::vector<Index>& splits);  // the last first
   void redo(const std::vector<Index>& splits);  // in order

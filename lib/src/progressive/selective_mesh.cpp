@@ -164,28 +164,22 @@ std::span<const double> SelectiveMesh::wedge_values(Index wedge) const {
   return {attributes_.data() + dims * static_cast<std::size_t>(wedge), dims};
 }
 
-SelectiveLevel SelectiveMesh::go_to(std::vector<char> wanted) {
+std::vector<char> SelectiveMesh::closed(std::vector<char> wanted) const {
   refiner_->check_size(wanted);
   refiner_->close(wanted);
-  return move_to(wanted, nullptr);
+  return wanted;
 }
+
+SelectiveLevel SelectiveMesh::go_to(std::vector<char> wanted) { return move_to(closed(std::move(wanted)), nullptr); }
 
 SelectiveLevel SelectiveMesh::adapt(const Viewpoint& view, LevelErrorKind kind) {
   const SelectiveRefiner::ViewTest test(*refiner_, view, kind);
   return move_to(test.wanted(), &test);
 }
 
-SelectiveMorph SelectiveMesh::morph_to(std::vector<char> wanted) {
-  refiner_->check_size(wanted);
-  refiner_->close(wanted);
-  return morph(wanted, nullptr);
-}
+SelectiveMorph SelectiveMesh::morph_to(std::vector<char> wanted) { return morph(closed(std::move(wanted)), nullptr); }
 
-SelectiveChanges SelectiveMesh::step_to(std::vector<char> wanted) {
-  refiner_->check_size(wanted);
-  refiner_->close(wanted);
-  return step(wanted);
-}
+SelectiveChanges SelectiveMesh::step_to(std::vector<char> wanted) { return step(closed(std::move(wanted))); }
 
 SelectiveChanges SelectiveMesh::step_to_view(const Viewpoint& view, LevelErrorKind kind) {
   return step(SelectiveRefiner::ViewTest(*refiner_, view, kind).wanted());
