@@ -9,6 +9,52 @@
 #include "progressive/view_test.h"
 
 namespace lodkit {
+namespace {
+
+// What splits about to be applied overwrite, set aside: their points' positions and the values of the
+// wedges they change (nothing else of the state they are applied to), so that the state before can be
+// swapped back in for a moment without a copy of it.
+class SetAside {
+ public:
+  SetAside(const ProgressiveMesh& pm, const std::vector<Index>& splits, std::vector<Eigen::Vector3d>& positions,
+           std::vector<double>& attributes)
+      : dims_(static_cast<std::size_t>(pm.attribute_dims)), positions_(positions), attributes_(attributes) {
+    for (Index j : splits) {
+      const VertexSplit& split = pm.splits[static_cast<std::size_t>(j)];
+      points_.push_back(split.point);
+      for (Index i = 0; i < split.num_attribute_changes; ++i)
+        wedges_.push_back(pm.attribute_changes[static_cast<std::size_t>(split.first_attribute_change + i)].wedge);
+    }
+    for (std::vector<Index>* list : {&points_, &wedges_}) {
+      std::sort(list->begin(), list->end());
+      list->erase(std::unique(list->begin(), list->end()), list->end());
+    }
+    for (Index p : points_) kept_positions_.push_back(positions_[static_cast<std::size_t>(p)]);
+    for (Index w : wedges_) {
+      const double* at = attributes_.data() + dims_ * static_cast<std::size_t>(w);
+      kept_values_.insert(kept_values_.end(), at, at + dims_);
+    }
+  }
+
+  // Exchanges what is set aside with what the state holds there.
+  void swap() {
+    for (std::size_t i = 0; i < points_.size(); ++i) std::swap(kept_positions_[i], positions_[static_cast<std::size_t>(points_[i])]);
+    for (std::size_t i = 0; i < wedges_.size(); ++i) {
+      double* kept = kept_values_.data() + dims_ * i;
+      std::swap_ranges(kept, kept + dims_, attributes_.data() + dims_ * static_cast<std::size_t>(wedges_[i]));
+    }
+  }
+
+ private:
+  std::size_t dims_;
+  std::vector<Eigen::Vector3d>& positions_;
+  std::vector<double>& attributes_;
+  std::vector<Index> points_, wedges_;
+  std::vector<Eigen::Vector3d> kept_positions_;
+  std::vector<double> kept_values_;
+};
+
+}  // namespace
 
 SelectiveMesh::SelectiveMesh(const SelectiveRefiner& refiner) : refiner_(&refiner) {
   detail::SplitState base = detail::base_state(*refiner.pm_);
@@ -59,35 +105,10 @@ SelectiveLevel SelectiveMesh::move_to(const std::vector<char>& wanted, const Sel
 
 SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
   // Through the union of both sets (closed, as both are): its connectivity, with each vertex's ancestor
-  // in the set before and in the new set. The new splits write only their points' positions and the
-  // values of the wedges they change: kept aside, those give the state before without a copy of it.
+  // in the set before and in the new set.
   const ProgressiveMesh& pm = *refiner_->pm_;
-  const std::size_t dims = static_cast<std::size_t>(pm.attribute_dims);
   const Change c = change_to(wanted);
-  std::vector<Index> points, wedges;
-  for (Index j : c.redo) {
-    const VertexSplit& split = pm.splits[static_cast<std::size_t>(j)];
-    points.push_back(split.point);
-    for (Index i = 0; i < split.num_attribute_changes; ++i)
-      wedges.push_back(pm.attribute_changes[static_cast<std::size_t>(split.first_attribute_change + i)].wedge);
-  }
-  for (auto* list : {&points, &wedges}) {
-    std::sort(list->begin(), list->end());
-    list->erase(std::unique(list->begin(), list->end()), list->end());
-  }
-  std::vector<Eigen::Vector3d> other_positions(points.size());
-  std::vector<double> other_values(dims * wedges.size());
-  // Swaps the kept values with the state's: the state before the new splits and after them.
-  auto swap_kept = [&] {
-    for (std::size_t i = 0; i < points.size(); ++i) std::swap(other_positions[i], positions_[static_cast<std::size_t>(points[i])]);
-    for (std::size_t i = 0; i < wedges.size(); ++i)
-      std::swap_ranges(other_values.begin() + static_cast<std::ptrdiff_t>(dims * i), other_values.begin() + static_cast<std::ptrdiff_t>(dims * (i + 1)),
-                       attributes_.begin() + static_cast<std::ptrdiff_t>(dims * static_cast<std::size_t>(wedges[i])));
-  };
-  for (std::size_t i = 0; i < points.size(); ++i) other_positions[i] = positions_[static_cast<std::size_t>(points[i])];
-  for (std::size_t i = 0; i < wedges.size(); ++i)
-    std::copy_n(attributes_.begin() + static_cast<std::ptrdiff_t>(dims * static_cast<std::size_t>(wedges[i])), dims,
-                other_values.begin() + static_cast<std::ptrdiff_t>(dims * i));
+  SetAside before(pm, c.redo, positions_, attributes_);
   redo(c.redo);
   SelectiveMorph out;
   Geomorph& g = out.geomorph;
@@ -96,7 +117,7 @@ SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const Selec
   Mesh start;
   detail::size_level_mesh(pm, end.num_vertices(), 0, start);
   // The state before, for a moment: its values and flags back where the new splits wrote.
-  swap_kept();
+  before.swap();
   for (Index j : c.redo) applied_[static_cast<std::size_t>(j)] = 0;
   for (Index row = 0; row < end.num_vertices(); ++row) {
     const Index w = g.fine.vertex_wedge[static_cast<std::size_t>(row)];
@@ -104,7 +125,7 @@ SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const Selec
   }
   g.coarse_level = static_cast<Index>(std::count(applied_.begin(), applied_.end(), 1));
   for (Index j : c.redo) applied_[static_cast<std::size_t>(j)] = 1;
-  swap_kept();
+  before.swap();
   undo(c.undo);
   for (Index row = 0; row < end.num_vertices(); ++row) {
     const Index w = g.fine.vertex_wedge[static_cast<std::size_t>(row)];
