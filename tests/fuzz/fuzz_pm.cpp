@@ -32,12 +32,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::vector<char> every_other(static_cast<std::size_t>(n), 0);
     for (std::size_t j = 0; j < every_other.size(); j += 2) every_other[j] = 1;
     const SelectiveLevel seen = refiner.refine_for_view(view, LevelErrorKind::Measured), half = refiner.refine(every_other);
-    for (const SelectiveLevel& s : {seen, half}) {
-      const Mesh& m = s.extracted.mesh;
+    auto check_indices = [](const Mesh& m) {
       for (Index f = 0; f < m.num_faces(); ++f)
         for (int k = 0; k < 3; ++k)
           if (m.triangles(f, k) < 0 || m.triangles(f, k) >= m.num_vertices()) __builtin_trap();
-    }
+    };
+    check_indices(seen.extracted.mesh);
+    check_indices(half.extracted.mesh);
     // The hierarchy finds what testing every region finds; a kept mesh moves between sets exactly.
     std::vector<char> every = refiner.regions_needing_refinement(view, LevelErrorKind::Measured);
     for (std::size_t j = every.size(); j-- > 0;)
@@ -57,9 +58,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       __builtin_trap();
     const Mesh& joint = back.geomorph.fine.mesh;
     if (back.geomorph.start_positions.rows() != joint.num_vertices()) __builtin_trap();
-    for (Index f = 0; f < joint.num_faces(); ++f)
-      for (int k = 0; k < 3; ++k)
-        if (joint.triangles(f, k) < 0 || joint.triangles(f, k) >= joint.num_vertices()) __builtin_trap();
+    check_indices(joint);
     (void)back.geomorph.at(0.5);
   } catch (const Error&) {
   }

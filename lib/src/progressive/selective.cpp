@@ -381,7 +381,6 @@ Index SelectiveRefiner::ancestor(Index wedge, const std::vector<char>& applied) 
   return wedge;
 }
 
-
 std::vector<char> SelectiveRefiner::splits_for_view(const Viewpoint& view, LevelErrorKind kind) const {
   return ViewTest(*this, view, kind).wanted();
 }

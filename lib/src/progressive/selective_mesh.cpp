@@ -123,7 +123,6 @@ SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const Selec
     const Index w = g.fine.vertex_wedge[static_cast<std::size_t>(row)];
     detail::put_wedge(pm, positions_, attributes_, refiner_->ancestor(w, applied_), start, row);
   }
-  g.coarse_level = static_cast<Index>(std::count(applied_.begin(), applied_.end(), 1));
   for (Index j : c.redo) applied_[static_cast<std::size_t>(j)] = 1;
   before.swap();
   undo(c.undo);
@@ -134,6 +133,7 @@ SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const Selec
   out.reached = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
   out.reached.splits_refined = static_cast<Index>(c.redo.size()), out.reached.splits_coarsened = static_cast<Index>(c.undo.size());
   g.fine_level = out.reached.splits_applied;
+  g.coarse_level = g.fine_level - out.reached.splits_refined + out.reached.splits_coarsened;
   g.start_positions = std::move(start.positions);
   g.start_normals = std::move(start.attributes.normals);
   g.start_uvs = std::move(start.attributes.uvs);
