@@ -31,12 +31,14 @@ constexpr const char* kUsage =
     "wedge and face slots named per view, the mean splits applied and undone per view when kept, the mean\n"
     "splits applied, faces, and vertices of the morph. Every 24th step, the surface's jump (Hausdorff\n"
     "distance, % of the diagonal) from the view before: at once, and the largest of 4 frames' with the\n"
-    "morph. Each kept and morphed view is checked against the fresh one.\n"
+    "morph. Each kept and morphed view is checked against the fresh one. Then the mean splits applied per\n"
+    "view to unfold faces that fold, and at those 10 views the faces facing against the input (compare's\n"
+    "count), as shown and without unfolding (Viewpoint::unfold off).\n"
     "Example: build/bench/lodkit_bench_selective_path ../shared/models/scans/stanford_bunny_zipper.ply\n";
 
 int run(int argc, char** argv) {
   fmt::print("mesh,faces,splits,path,views,fresh_ms,kept_ms,morph_ms,step_ms,slots_per_view,changed_per_view,splits_applied,"
-             "view_faces,morph_vertices,jump_pct,morph_frame_jump_pct\n");
+             "view_faces,morph_vertices,jump_pct,morph_frame_jump_pct,unfolding_per_view,against,against_allowing_folds\n");
   constexpr int kViews = 240, kJumpEvery = 24, kFrames = 4;
   for (int i = 1; i < argc; ++i) {
     const std::string path = argv[i];
@@ -57,7 +59,8 @@ int run(int argc, char** argv) {
     for (const auto& [name, eye_at] : {std::pair<const char*, std::function<Eigen::Vector3d(int)>>{"orbit", orbit}, {"dolly", dolly}}) {
       SelectiveMesh kept(refiner), morphing(refiner), stepping(refiner);
       double fresh_ms = 0, kept_ms = 0, morph_ms = 0, step_ms = 0, slots = 0, changed = 0, applied = 0, faces = 0, morph_vertices = 0;
-      double jump = 0, frame_jump = 0;
+      double jump = 0, frame_jump = 0, unfolding = 0;
+      Index against = 0, against_folded = 0;
       Mesh before;
       for (int v = 0; v < kViews; ++v) {
         Viewpoint view;
@@ -84,6 +87,11 @@ int run(int argc, char** argv) {
         if (v > 0 && v % kJumpEvery == 0) {
           // The frames a viewer sees: the view before, the morph's inner frames, this view.
           jump = std::max(jump, compare(before, b.extracted.mesh).hausdorff);
+          // Faces facing against the input, unfolded and not.
+          against += count_flipped_faces(mesh, b.extracted.mesh);
+          Viewpoint as_is = view;
+          as_is.unfold = false;
+          against_folded += count_flipped_faces(mesh, refiner.refine_for_view(as_is, LevelErrorKind::Measured).extracted.mesh);
           Mesh last = before;
           for (int k = 1; k <= kFrames; ++k) {
             Mesh next = k < kFrames ? m.geomorph.at(double(k) / kFrames) : b.extracted.mesh;
@@ -94,13 +102,15 @@ int run(int argc, char** argv) {
         before = b.extracted.mesh;
         if (v > 0) changed += double(b.splits_refined + b.splits_coarsened);  // the first view starts from the base
         applied += double(b.splits_applied);
+        unfolding += double(b.splits_unfolding);
         faces += double(b.extracted.mesh.num_faces());
       }
       const double diagonal = pm.bounds.diagonal().norm();
-      fmt::print("{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{:.1f},{:.0f},{:.0f},{:.0f},{:.5f},{:.5f}\n", path,
+      fmt::print("{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{:.1f},{:.0f},{:.0f},{:.0f},{:.5f},{:.5f},{:.2f},{},{}\n", path,
                  mesh.num_faces(), pm.splits.size(), name, kViews, fresh_ms / kViews, kept_ms / kViews, morph_ms / kViews,
                  step_ms / kViews, slots / (kViews - 1), changed / (kViews - 1),
-                 applied / kViews, faces / kViews, morph_vertices / kViews, 100 * jump / diagonal, 100 * frame_jump / diagonal);
+                 applied / kViews, faces / kViews, morph_vertices / kViews, 100 * jump / diagonal, 100 * frame_jump / diagonal,
+                 unfolding / kViews, against, against_folded);
     }
   }
   return 0;

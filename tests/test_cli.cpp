@@ -974,7 +974,8 @@ TEST(CliPm, ExtractRefinesSelectivelyForAnEye) {
   // What does not combine with an eye is refused, naming why.
   for (const char* bad : {"--eye 0,0,1", "--eye 0,0,1 --faces 10 --pixel-error 1", "--eye 0,0 --pixel-error 1",
                           "--eye 0,0,1 --pixel-error 1 --input-order", "--look-at 0,0,0 --pixel-error 1 --distance 3",
-                          "--eye 0,0,1 --pixel-error 1 --distance 3", "--eye 0,0,1 --look-at 0,0,1 --pixel-error 1"}) {
+                          "--eye 0,0,1 --pixel-error 1 --distance 3", "--eye 0,0,1 --look-at 0,0,1 --pixel-error 1",
+                          "--faces 10 --no-cull", "--faces 10 --cull-backfaces", "--faces 10 --allow-folds"}) {
     const CliRun b = run(dir, std::string("pm extract t.pm -o x.ply ") + bad);
     EXPECT_NE(b.status, 0) << bad;
     EXPECT_FALSE(b.err.empty()) << bad;
@@ -989,6 +990,29 @@ TEST(CliPm, ExtractRefinesSelectivelyForAnEye) {
   EXPECT_NE(inside.err.find("bounding box centre"), std::string::npos) << inside.err;
   EXPECT_NE(inside.err.find("--look-at"), std::string::npos) << inside.err;
   EXPECT_EQ(run(dir, "pm extract t.pm -o x.ply --pixel-error 1 --no-cull --eye " + centre).status, 0);
+}
+
+TEST(CliPm, ExtractUnfoldsWhatMixedLevelsFold) {
+  // Close to a fractal pyramid, splits of different levels meet and a face folds (faces against the
+  // input): the view is refined further there, says by how many splits, and nothing faces against the
+  // input; --allow-folds leaves it.
+  test::ScratchDir dir("cli-pm-unfold");
+  ASSERT_EQ(run(dir, "terrain -o p.ply --base pyramid --levels 5").status, 0);
+  ASSERT_EQ(run(dir, "pm build p.ply -o p.pm").status, 0);
+  const std::string view = "pm extract p.pm --json --pixel-error 0.5 --viewport 400 --eye=-0.32,0.334,0.226 ";
+  const CliRun unfolded = run(dir, view + "-o u.ply"), folded = run(dir, view + "-o f.ply --allow-folds");
+  ASSERT_EQ(unfolded.status, 0) << unfolded.err;
+  ASSERT_EQ(folded.status, 0) << folded.err;
+  const auto uj = nlohmann::json::parse(unfolded.out), fj = nlohmann::json::parse(folded.out);
+  const Index more = uj["splits_unfolding"].get<Index>();
+  EXPECT_GT(more, 0);
+  EXPECT_EQ(fj["splits_unfolding"].get<Index>(), 0);
+  EXPECT_EQ(uj["splits_applied"].get<Index>(), fj["splits_applied"].get<Index>() + more);
+  auto against = [&](const char* out) {
+    return nlohmann::json::parse(run(dir, std::string("compare p.ply ") + out + " --json").out)["b_faces_against_a"].get<Index>();
+  };
+  EXPECT_EQ(against("u.ply"), 0);
+  EXPECT_GT(against("f.ply"), 0);
 }
 
 TEST(CliPm, ExtractRefinesSelectivelyAlongAnEyePath) {

@@ -11,6 +11,7 @@
 #include <lodkit/terrain.h>
 
 #include <fmt/format.h>
+#include <numbers>
 #include <random>
 
 #include "core/geometry.h"
@@ -393,6 +394,95 @@ void expect_same_level(const SelectiveLevel& kept, const SelectiveLevel& fresh, 
   EXPECT_EQ(kept.max_pixels, fresh.max_pixels) << what;
   EXPECT_EQ(kept.regions_outside, fresh.regions_outside) << what;
   EXPECT_EQ(kept.regions_facing_away, fresh.regions_facing_away) << what;
+  EXPECT_EQ(kept.splits_unfolding, fresh.splits_unfolding) << what;
+}
+
+// Faces that fold in a kept mesh's state: shown, and facing against their own face in the input (the
+// finest level), where that has area.
+struct FoldCount {
+  std::vector<Eigen::Vector3d> input_normal;  // per face of the stream
+
+  FoldCount(const ProgressiveMesh& pm, const SelectiveRefiner& refiner) {
+    SelectiveMesh finest(refiner);
+    finest.go_to(std::vector<char>(pm.splits.size(), 1));
+    for (Index f = 0; f < Index(pm.face_corners.size()); ++f) input_normal.push_back(normal(finest, f));
+  }
+  static Eigen::Vector3d normal(const SelectiveMesh& m, Index f) {
+    const Eigen::Vector3d &a = m.wedge_position(m.face_corner(f, 0)), &b = m.wedge_position(m.face_corner(f, 1)),
+                          &c = m.wedge_position(m.face_corner(f, 2));
+    return (b - a).cross(c - a);
+  }
+  Index operator()(const SelectiveMesh& m) const {
+    Index folded = 0;
+    for (Index f = 0; f < Index(input_normal.size()); ++f)
+      folded += m.face_shown(f) && input_normal[std::size_t(f)].squaredNorm() > 0 && !(normal(m, f).dot(input_normal[std::size_t(f)]) > 0);
+    return folded;
+  }
+};
+
+Mesh fractal_pyramid() {
+  TerrainOptions o;
+  o.levels = 5;
+  return generate_terrain(make_terrain_base(TerrainBase::Pyramid), o).mesh;
+}
+
+// Eyes around the centre at `distance` bounding radii, from below, level and above.
+std::vector<Viewpoint> views_around(const ProgressiveMesh& pm, double distance) {
+  std::vector<Viewpoint> out;
+  for (int azimuth = 0; azimuth < 360; azimuth += 45)
+    for (int elevation : {-60, 0, 60}) {
+      const double a = azimuth * std::numbers::pi / 180, e = elevation * std::numbers::pi / 180;
+      Viewpoint& v = out.emplace_back();
+      v.look_at = pm.bounds.center();
+      v.eye = v.look_at + distance * bounding_radius(pm) * Eigen::Vector3d(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+      v.viewport_pixels = 400;
+    }
+  return out;
+}
+
+TEST(SelectiveRefinement, ViewsRefineWhereMixedLevelsFold) {
+  // A split's neighbours can be coarser or finer than in its uniform level, so a face can fold where no
+  // uniform level's does: on a fractal pyramid, close views do. Unfolded, no face folds; the view's own
+  // splits are all applied, with those that unfold counted, and only views that folded need any.
+  const ProgressiveMesh pm = build_progressive_mesh(fractal_pyramid());
+  const SelectiveRefiner refiner(pm);
+  const FoldCount folds(pm, refiner);
+  SelectiveMesh raw(refiner), unfolded(refiner);
+  int folding = 0, views = 0;
+  for (std::size_t n = 0; n <= pm.splits.size(); n += pm.splits.size() / 8) {  // the uniform levels do not fold
+    std::vector<char> prefix(pm.splits.size(), 0);
+    std::fill_n(prefix.begin(), n, 1);
+    raw.go_to(prefix);
+    ASSERT_EQ(folds(raw), 0) << "level " << n;
+  }
+  for (const LevelErrorKind kind : {LevelErrorKind::Bound, LevelErrorKind::Measured})
+    for (double distance : {0.6, 1.2})
+      for (Viewpoint view : views_around(pm, distance)) {
+        const std::string what = fmt::format("view {}", views++);
+        view.pixel_error = 0.5;
+        view.unfold = false;
+        const SelectiveLevel as_is = raw.adapt(view, kind);
+        const Index folded = folds(raw);
+        ASSERT_EQ(raw.applied(), refiner.splits_for_view(view, kind)) << what;
+        EXPECT_EQ(as_is.splits_unfolding, 0) << what;
+        view.unfold = true;
+        const SelectiveLevel s = unfolded.adapt(view, kind);
+        expect_same_level(s, refiner.refine_for_view(view, kind), what);
+        EXPECT_EQ(folds(unfolded), 0) << what << ": " << folded << " folded";
+        Index more = 0;
+        for (std::size_t j = 0; j < pm.splits.size(); ++j) {
+          ASSERT_TRUE(unfolded.applied()[j] || !raw.applied()[j]) << what;
+          more += unfolded.applied()[j] && !raw.applied()[j];
+          if (unfolded.applied()[j]) {
+            for (Index d : refiner.dependencies(Index(j))) ASSERT_TRUE(unfolded.applied()[std::size_t(d)]) << what;
+          }
+        }
+        EXPECT_EQ(s.splits_unfolding, more) << what;
+        EXPECT_EQ(s.splits_applied, as_is.splits_applied + more) << what;
+        EXPECT_EQ(more > 0, folded > 0) << what;
+        folding += folded > 0;
+      }
+  EXPECT_GE(folding, 4) << "of " << views << " views";  // the test needs views that fold
 }
 
 TEST(SelectiveMesh, EveryStateIsTheSetsMeshWhateverCameBefore) {
@@ -444,6 +534,7 @@ TEST(SelectiveMesh, FollowsAMovingViewerChangingOnlyWhatTheViewChanges) {
     const LevelErrorKind kind = frame >= 30 ? LevelErrorKind::Bound : LevelErrorKind::Measured;
     const SelectiveLevel kept = mesh.adapt(view, kind), fresh = refiner.refine_for_view(view, kind);
     expect_same_level(kept, fresh, fmt::format("frame {}", frame));
+    EXPECT_EQ(kept.splits_unfolding, 0) << "frame " << frame;  // (this sphere's views do not fold)
     EXPECT_EQ(mesh.applied(), refiner.splits_for_view(view, kind)) << "frame " << frame;
     if (frame % 10 != 0) {  // within a leg
       changed += kept.splits_refined + kept.splits_coarsened;
@@ -656,6 +747,75 @@ TEST(SelectiveMesh, MorphsFromViewToViewAsAdaptMoves) {
   }
   EXPECT_GT(refined, 0);
   EXPECT_GT(coarsened, 0);  // both ways blend
+}
+
+TEST(SelectiveMesh, UnfoldsAlikeWhateverCameBefore) {
+  // Close views of the fractal pyramid, with random sets and views left folded between them:
+  // each view kept, stepped into a renderer's buffers or morphed to is refine_for_view()'s, unfolded,
+  // whatever state came before.
+  std::mt19937 rng(37);
+  const ProgressiveMesh pm = build_progressive_mesh(fractal_pyramid());
+  const SelectiveRefiner refiner(pm);
+  const FoldCount folds(pm, refiner);
+  const std::size_t n = pm.splits.size();
+  const LevelErrorKind kind = LevelErrorKind::Bound;
+  SelectiveMesh kept(refiner), stepping(refiner), morphing(refiner);
+  Buffers buffers(pm, stepping);
+  auto upload = [&](const SelectiveChanges& c) {
+    for (Index w : c.wedges) buffers.upload_wedge(stepping, w);
+    for (Index f : c.faces) buffers.upload_face(stepping, f);
+  };
+  SelectiveLevel before = refiner.refine(std::vector<char>(n, 0));
+  int unfolding_views = 0, folded_states = 0;
+  const std::vector<Viewpoint> views = views_around(pm, 0.6);
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const std::string what = fmt::format("view {}", i);
+    if (i % 4 == 2) {  // a random set
+      std::bernoulli_distribution pick(0.05);
+      std::vector<char> wanted(n);
+      for (char& w : wanted) w = pick(rng);
+      const SelectiveLevel fresh = refiner.refine(wanted);
+      expect_same_level(kept.go_to(wanted), fresh, what + ", a set");
+      upload(stepping.step_to(wanted));
+      expect_identical(buffers.draw(), fresh.extracted.mesh, what + ", a set stepped to");
+      const std::vector<char> applied_before = morphing.applied();
+      const SelectiveMorph m = morphing.morph_to(wanted);
+      expect_morph_between(refiner, m, before, applied_before, morphing.applied(), what + ", a set morphed to");
+      before = m.reached;
+    }
+    if (i % 2 == 1) {  // another view, left folded
+      Viewpoint other = views[(i + 9) % views.size()];
+      other.pixel_error = 0.5;
+      other.unfold = false;
+      const SelectiveLevel fresh = refiner.refine_for_view(other, kind);
+      expect_same_level(kept.adapt(other, kind), fresh, what + ", another view");
+      folded_states += folds(kept) > 0;
+      upload(stepping.step_to_view(other, kind));
+      expect_identical(buffers.draw(), fresh.extracted.mesh, what + ", another view stepped to");
+      const std::vector<char> applied_before = morphing.applied();
+      const SelectiveMorph m = morphing.morph_to_view(other, kind);
+      expect_morph_between(refiner, m, before, applied_before, morphing.applied(), what + ", another view morphed to");
+      before = m.reached;
+    }
+    Viewpoint view = views[i];
+    view.pixel_error = 0.5;
+    const SelectiveLevel fresh = refiner.refine_for_view(view, kind);
+    expect_same_level(kept.adapt(view, kind), fresh, what);
+    EXPECT_EQ(folds(kept), 0) << what;
+    const SelectiveChanges c = stepping.step_to_view(view, kind);
+    upload(c);
+    expect_identical(buffers.draw(), fresh.extracted.mesh, what + ", stepped");
+    EXPECT_EQ(c.splits_unfolding, fresh.splits_unfolding) << what;
+    const std::vector<char> applied_before = morphing.applied();
+    const SelectiveMorph m = morphing.morph_to_view(view, kind);
+    expect_same_level(m.reached, fresh, what + ", morphed");
+    expect_morph_between(refiner, m, before, applied_before, morphing.applied(), what + ", morphed");
+    before = m.reached;
+    unfolding_views += fresh.splits_unfolding > 0;
+  }
+  // The test needs views that unfold, and states left folded for the next view to find.
+  EXPECT_GE(unfolding_views, 3);
+  EXPECT_GE(folded_states, 2);
 }
 
 }  // namespace

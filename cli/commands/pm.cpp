@@ -42,7 +42,7 @@ struct PmCliOptions {
   std::optional<std::string> eye_path;     // extract: ... for each viewer of this file
   int morph_frames = 1;                    // extract --eye-path: frames per step, the last the view itself
   double aspect = 16.0 / 9.0;
-  bool no_cull = false, cull_backfaces = false;
+  bool no_cull = false, cull_backfaces = false, allow_folds = false;
   std::optional<Index> rows;
 };
 
@@ -314,9 +314,10 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
     view.pixel_error = *o.pixel_error;
     view.cull = !o.no_cull;
     view.cull_backfaces = o.cull_backfaces;
+    view.unfold = !o.allow_folds;
   }
   nlohmann::json reports = nlohmann::json::array();
-  Index fewest = std::numeric_limits<Index>::max(), most = 0, changed = 0;
+  Index fewest = std::numeric_limits<Index>::max(), most = 0, changed = 0, unfolding_views = 0;
   double widest = 0;
   // With --morph-frames K, each step from one view to the next is K frames: K - 1 of the geomorph between
   // them (alpha 1/K ... (K-1)/K), then the view itself.
@@ -349,6 +350,7 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
     const Index faces = s.extracted.mesh.num_faces();
     fewest = std::min(fewest, faces), most = std::max(most, faces), widest = std::max(widest, s.max_pixels);
     if (i > 0) changed += s.splits_refined + s.splits_coarsened;
+    unfolding_views += s.splits_unfolding > 0;
     nlohmann::json j{{"output", output},
                      {"eye", {view.eye.x(), view.eye.y(), view.eye.z()}},
                      {"look_at", {view.look_at.x(), view.look_at.y(), view.look_at.z()}},
@@ -357,6 +359,7 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
                      {"splits_applied", s.splits_applied},
                      {"splits_refined", s.splits_refined},
                      {"splits_coarsened", s.splits_coarsened},
+                     {"splits_unfolding", s.splits_unfolding},
                      {"error_bound", s.error_bound},
                      {"deviation", s.deviation},
                      {"max_pixels", s.max_pixels},
@@ -367,11 +370,12 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
     if (!morph_outputs.empty()) j["morph_outputs"] = morph_outputs, j["morph_vertices"] = morph_vertices;
     if (!path && !o.json && !global.quiet) {
       fmt::print(stderr,
-                 "pm extract: selective refinement for the eye at ({}, {}, {}): {} faces, {} vertices, {} of {} splits; {} "
+                 "pm extract: selective refinement for the eye at ({}, {}, {}): {} faces, {} vertices, {} of {} splits{}; {} "
                  "projects to at most {:.3g} px in view (budget {} px); deviation {:.6g}, bound {:.6g}{}{}; read {} bytes, "
                  "{:.1f} ms\n",
                  view.eye.x(), view.eye.y(), view.eye.z(), thousands(faces), thousands(s.extracted.mesh.num_vertices()),
-                 thousands(s.splits_applied), thousands(pm.max_level()), what, s.max_pixels, view.pixel_error, s.deviation,
+                 thousands(s.splits_applied), thousands(pm.max_level()),
+                 s.splits_unfolding ? fmt::format(" ({} to unfold faces that folded)", thousands(s.splits_unfolding)) : "", what, s.max_pixels, view.pixel_error, s.deviation,
                  s.error_bound, s.regions_outside ? fmt::format(", {} regions out of view left coarse", thousands(s.regions_outside)) : "",
                  s.regions_facing_away ? fmt::format(", {} facing away", thousands(s.regions_facing_away)) : "",
                  thousands(static_cast<long long>(r.bytes_read)),
@@ -396,9 +400,10 @@ int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std:
   } else if (path && !global.quiet) {
     fmt::print(stderr,
                "pm extract: {} views along {}, one mesh kept from view to view: {} to {} faces, {:.1f} of {} splits applied or "
-               "undone per view after the first; {} projects to at most {:.3g} px in view (budget {} px); {}{} ... {} in {:.2f} s\n",
+               "undone per view after the first{}; {} projects to at most {:.3g} px in view (budget {} px); {}{} ... {} in {:.2f} s\n",
                viewers.size(), *o.eye_path, thousands(fewest), thousands(most),
-               viewers.size() > 1 ? double(changed) / double(viewers.size() - 1) : 0.0, thousands(pm.max_level()), what, widest,
+               viewers.size() > 1 ? double(changed) / double(viewers.size() - 1) : 0.0, thousands(pm.max_level()),
+               unfolding_views ? fmt::format(" ({} views refined further to unfold faces that folded)", unfolding_views) : "", what, widest,
                *o.pixel_error,
                per_step > 1 ? fmt::format("each change blended in over {} frames (geomorphs), views every {} frames: ", per_step, per_step) : "",
                numbered(o.output, 0), numbered(o.output, (viewers.size() - 1) * per_step), seconds);
@@ -411,7 +416,9 @@ int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
   refuse_to_overwrite(o.output, inputs);  // before reading: fail fast
   refuse_json_beside_stdout(o.json, o.output);
   if (!o.eye.empty() || o.eye_path) return run_selective(o, global, inputs);
-  if (!o.look_at.empty()) throw Error("pm extract: --look-at needs --eye or --eye-path");
+  for (const auto& [given, flag] : {std::pair{!o.look_at.empty(), "--look-at"}, {o.no_cull, "--no-cull"},
+                                     {o.cull_backfaces, "--cull-backfaces"}, {o.allow_folds, "--allow-folds"}})
+    if (given) throw Error(fmt::format("pm extract: {} needs --eye or --eye-path", flag));
   const int given = o.faces.has_value() + o.ratio.has_value() + o.pixel_error.has_value() + o.max_error.has_value();
   if (given != 1) throw Error("pm extract: give exactly one of --faces, --ratio, --max-error or --pixel-error");
   if (o.prove_with && !o.max_error && !o.pixel_error)
@@ -602,6 +609,9 @@ Examples:
   extract->add_flag("--no-cull", opt->no_cull, "With --eye: refine what lies outside the view too");
   extract->add_flag("--cull-backfaces", opt->cull_backfaces,
                     "With --eye: leave regions facing away from the eye coarse (closed meshes: hidden behind the front)");
+  extract->add_flag("--allow-folds", opt->allow_folds,
+                    "With --eye: leave faces that fold (face against their own input face, where splits of different "
+                    "levels meet) as they are, instead of refining further until none does");
   extract->add_flag("--input-order", opt->input_order, "Vertices and faces in input order (reads the whole file)");
   extract->add_flag("--certified", opt->certified, "Select by the collapses' own guaranteed bound (4-50x looser) even when the stream has measured errors");
   extract->add_option("--prove-with", opt->prove_with,
@@ -619,7 +629,9 @@ The error is the level's measured distance to the input when the stream was buil
 With --eye, each region of the mesh is refined on its own (selective refinement): d is the distance
 from the eye to the region, whose error is its measured deviation (its guaranteed bound with
 --certified); regions outside the view cone stay coarse unless --no-cull, and so do regions facing
-away with --cull-backfaces. --eye-path does so for each line of a file (a camera path), keeping one
+away with --cull-backfaces. Where splits of different levels meet, a face can fold (face against its
+own face in the input, as no uniform level's does): the mesh is refined further there until none
+does, unless --allow-folds. --eye-path does so for each line of a file (a camera path), keeping one
 mesh from view to view: each view applies and undoes only the splits that change. With
 --morph-frames K the change from one view to the next blends in over K frames (Hoppe 1997's
 geomorphs, refining and coarsening at once): K - 1 frames morph from the view before to the next,

@@ -2,7 +2,8 @@
 // the levels it returns must extract, geomorph and refine selectively (for a view culling back
 // faces, and for every other split) without a crash or a sanitizer report, each vertex index in range;
 // the view's splits found down the hierarchy must be those of testing every region, a kept mesh
-// moved from one set to the other must give the same meshes, and so must a geomorph between them.
+// moved from one set to the other must give the same meshes, and so must a geomorph between them
+// (views unfolded, sets not).
 #include <lodkit/error.h>
 #include <lodkit/pm_io.h>
 #include <lodkit/progressive.h>
@@ -60,6 +61,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (back.geomorph.start_positions.rows() != joint.num_vertices()) __builtin_trap();
     check_indices(joint);
     (void)back.geomorph.at(0.5);
+    // And a geomorph to the view again, unfolded from a state that was not.
+    const SelectiveMorph again = kept.morph_to_view(view, LevelErrorKind::Measured);
+    if (again.reached.extracted.mesh.triangles != seen.extracted.mesh.triangles ||
+        again.reached.extracted.mesh.positions != seen.extracted.mesh.positions)
+      __builtin_trap();
   } catch (const Error&) {
   }
   return 0;

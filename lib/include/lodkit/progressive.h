@@ -289,6 +289,8 @@ struct Viewpoint {
   bool cull = true;  ///< leave what lies outside the view cone (around the frustum) coarse
   /// Leave regions facing away from the eye coarse (for closed meshes: hidden behind the front).
   bool cull_backfaces = false;
+  /// Refine further where a face folds: faces against their own input face (see SelectiveRefiner).
+  bool unfold = true;
 };
 
 /// A selectively refined mesh and what it guarantees.
@@ -306,6 +308,8 @@ struct SelectiveLevel {
   Index regions_facing_away = 0;  ///< left coarse because they face away (Viewpoint::cull_backfaces)
   /// By SelectiveMesh: the splits applied and undone to get here from its previous state.
   Index splits_refined = 0, splits_coarsened = 0;
+  /// By a view that unfolds: the splits applied beyond the view's own to unfold faces (in splits_applied).
+  Index splits_unfolding = 0;
 };
 
 /// Selective refinement (Hoppe 1996, section 5): a mesh that applies only the splits a viewer needs,
@@ -321,6 +325,13 @@ struct SelectiveLevel {
 /// a surface is within that to a finer one plus theirs apart), never more than the bound. The
 /// deviation is what a viewer sees; it is measured, not proved. A stream read in part (a prefix, or a
 /// damaged stream's valid part) adds its last level's error from the input to both.
+///
+/// Folds. A split's neighbours may be coarser or finer than in its uniform level, so a face of a
+/// selective mesh can face against its own face in the input, which no uniform level's face does (the
+/// simplifier's turn limit). A view (Viewpoint::unfold, the default) then applies, round by round, the
+/// next split of each corner of every face that folds, and their dependencies, until none does: every
+/// split moves a point towards the input, whose faces do not fold, so it ends. The result depends on
+/// the view's set alone, however the mesh got there.
 class SelectiveRefiner {
  public:
   /// Finds every split's dependencies and region (time and memory linear in the stream). `pm` must
@@ -343,9 +354,10 @@ class SelectiveRefiner {
   /// projecting to more than view.pixel_error pixels (error * H / (2 d tan(fov / 2)), d the distance
   /// from the eye to the region's ball), and their dependencies. \throw Error for a bad view.
   SelectiveLevel refine_for_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound) const;
-  /// The splits refine_for_view() applies for this view (one entry per split), without the mesh: those
-  /// of regions_needing_refinement() and their dependencies, found down the hierarchy of splits only
-  /// where a region can need it (what lies below a split is held in one ball with its largest error).
+  /// The view's own splits (one entry per split), without the mesh: those of regions_needing_refinement()
+  /// and their dependencies, found down the hierarchy of splits only where a region can need it (what
+  /// lies below a split is held in one ball with its largest error). refine_for_view() applies these,
+  /// and those that unfold its faces unless the view says not to.
   std::vector<char> splits_for_view(const Viewpoint& view, LevelErrorKind kind = LevelErrorKind::Bound) const;
   /// Per split, whether its own region needs refining for this view: in the view cone, not facing away,
   /// with an error projecting past the budget. Every region is tested (time linear in the stream).
@@ -361,7 +373,17 @@ class SelectiveRefiner {
   /// The splits just below split j in the hierarchy: the next split of its point and the first of the
   /// point it makes (-1 where there is none).
   std::array<Index, 2> below(Index split) const;
-  SelectiveLevel apply_closed(const std::vector<char>& applied, const ViewTest* view) const;  // from the base
+  SelectiveLevel apply_closed(std::vector<char> applied, const ViewTest* view) const;  // from the base
+  /// Whether face `face` of the state folds: shown, facing against its input face (which has area).
+  bool folds(Index face, const std::vector<Eigen::Vector3d>& positions, const std::vector<Index>& corners,
+             const std::vector<char>& applied) const;
+  /// Applies to the state of the closed set `applied` the splits that unfold its faces, where every
+  /// face that can fold is among `check` (the faces of the points of the splits that changed since the
+  /// state had none) or, with `check` null, anywhere. Returns them, ascending.
+  std::vector<Index> unfold(std::vector<Eigen::Vector3d>& positions, std::vector<double>& attributes, std::vector<Index>& corners,
+                            std::vector<char>& applied, const std::vector<Index>* check) const;
+  /// Appends the faces that ever have a corner at split `split`'s two points.
+  void append_faces_of(Index split, std::vector<Index>& faces) const;
   /// The mesh of the closed set `applied` from the state's arrays, in stream order.
   ExtractedLevel mesh_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
                          const std::vector<Index>& corners, const std::vector<char>& applied) const;
@@ -381,6 +403,8 @@ class SelectiveRefiner {
   std::vector<Index> wedge_split_;     // per wedge: the split that makes it, or -1 (the base's)
   std::vector<Index> face_split_;      // per face: the split that opens it, or -1 (the base's)
   std::vector<Index> point_wedge_start_, point_wedges_;  // CSR: each point's wedges
+  std::vector<Index> point_face_start_, point_faces_;    // CSR: the faces ever with a corner at each point
+  std::vector<Eigen::Vector3f> input_normal_;            // per face: its normal at the finest level (unscaled)
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_, deviation_;
   double beyond_bound_ = 0, beyond_deviation_ = 0;  // the last level's bound and measured error (0 when it is the input)
@@ -414,6 +438,7 @@ struct SelectiveChanges {
   std::vector<Index> wedges;  ///< wedges that appeared, or whose point moved or values changed (ascending)
   std::vector<Index> faces;   ///< faces that appeared or went, or whose corners changed (ascending)
   Index splits_refined = 0, splits_coarsened = 0;
+  Index splits_unfolding = 0;  ///< as SelectiveLevel::splits_unfolding
 };
 
 /// A selectively refined mesh kept from view to view (Hoppe 1997): moving to another set of splits
@@ -451,17 +476,21 @@ class SelectiveMesh {
   };
   std::vector<char> closed(std::vector<char> wanted) const;  // checked, with every dependency
   Change change_to(const std::vector<char>& wanted) const;
+  /// Moves to the closed set `wanted` and, when `unfold`, on to the splits that unfold it (counted in
+  /// `unfolding`): what changed from the state before, net.
+  Change reach(const std::vector<char>& wanted, bool unfold, Index& unfolding);
   void undo(const std::vector<Index>& splits);  // the last first
   void redo(const std::vector<Index>& splits);  // in order
   SelectiveLevel move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view);  // wanted is closed
   SelectiveMorph morph(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view);    // wanted is closed
-  SelectiveChanges step(const std::vector<char>& wanted);                                           // wanted is closed
+  SelectiveChanges step(const std::vector<char>& wanted, bool unfold);                              // wanted is closed
 
   const SelectiveRefiner* refiner_;
   std::vector<Eigen::Vector3d> positions_;
   std::vector<double> attributes_;
   std::vector<Index> corners_;
   std::vector<char> applied_;
+  bool fold_free_ = false;  // whether the state was unfolded: only faces a change touches can fold
 };
 
 }  // namespace lodkit

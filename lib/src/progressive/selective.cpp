@@ -61,6 +61,7 @@ struct UniformWalk {
   std::vector<Index> start, dependencies, previous_at_point;
   std::vector<double> local;  // the distance between s's faces before and after the split, at samples
   std::vector<detail::NormalCone> cone;  // the normals of s's faces before and after the split
+  std::vector<Eigen::Vector3f> input_normal;  // per face, at the finest level (unscaled)
 };
 
 // A point's faces (three corners each) and, when asked, samples on them: the point, its edges'
@@ -176,6 +177,11 @@ UniformWalk walk_uniform_sequence(const ProgressiveMesh& pm) {
     }
     if (local <= rounding) local = 0;  // a split within a plane (else an eye inside its ball refines it)
   }
+  walk.input_normal.resize(pm.face_corners.size());
+  for (std::size_t f = 0; f < pm.face_corners.size(); ++f) {
+    auto at = [&](int k) -> const Eigen::Vector3d& { return state.positions[static_cast<std::size_t>(point_of(state.corners[3 * f + k]))]; };
+    walk.input_normal[f] = (at(1) - at(0)).cross(at(2) - at(0)).cast<float>();
+  }
   return walk;
 }
 
@@ -232,6 +238,35 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   std::vector<Index> next(point_wedge_start_.begin(), point_wedge_start_.end() - 1);
   for (std::size_t w = 0; w < pm.wedge_point.size(); ++w)
     point_wedges_[static_cast<std::size_t>(next[static_cast<std::size_t>(pm.wedge_point[w])]++)] = static_cast<Index>(w);
+  // The faces ever with a corner at each point: those it starts with and those a split moves to or
+  // from it (a face's corners change only so), for finding the faces a split can fold.
+  input_normal_ = std::move(walk.input_normal);
+  {
+    std::vector<std::pair<Index, Index>> at;  // (point, face)
+    at.reserve(3 * pm.face_corners.size() + 2 * pm.corner_changes.size());
+    for (std::size_t f = 0; f < pm.face_corners.size(); ++f)
+      for (int k = 0; k < 3; ++k) at.emplace_back(pm.wedge_point[static_cast<std::size_t>(pm.face_corners[f][k])], static_cast<Index>(f));
+    for (const CornerChange& c : pm.corner_changes)
+      for (Index w : {c.coarse_wedge, c.fine_wedge}) at.emplace_back(pm.wedge_point[static_cast<std::size_t>(w)], c.corner / 3);
+    point_face_start_.assign(points + 1, 0);
+    for (const auto& [point, face] : at) ++point_face_start_[static_cast<std::size_t>(point) + 1];
+    for (std::size_t p = 0; p < points; ++p) point_face_start_[p + 1] += point_face_start_[p];
+    point_faces_.resize(at.size());
+    std::vector<Index> next_face(point_face_start_.begin(), point_face_start_.end() - 1);
+    for (const auto& [point, face] : at) point_faces_[static_cast<std::size_t>(next_face[static_cast<std::size_t>(point)]++)] = face;
+    // Each point's list once per face, in place.
+    Index kept = 0;
+    for (std::size_t p = 0; p < points; ++p) {
+      const auto first = point_faces_.begin() + point_face_start_[p], last = point_faces_.begin() + point_face_start_[p + 1];
+      std::sort(first, last);
+      const auto end = std::unique(first, last);
+      point_face_start_[p] = kept;
+      kept = static_cast<Index>(std::copy(first, end, point_faces_.begin() + kept) - point_faces_.begin());
+    }
+    point_face_start_[points] = kept;
+    point_faces_.resize(static_cast<std::size_t>(kept));
+    point_faces_.shrink_to_fit();
+  }
   deviation_.resize(n);
   std::vector<detail::NormalCone>& cone = walk.cone;
   for (std::size_t j = n; j-- > 0;) {
@@ -314,11 +349,78 @@ SelectiveLevel SelectiveRefiner::refine(std::vector<char> wanted) const {
   return apply_closed(wanted, nullptr);
 }
 
-SelectiveLevel SelectiveRefiner::apply_closed(const std::vector<char>& applied, const ViewTest* view) const {
+SelectiveLevel SelectiveRefiner::apply_closed(std::vector<char> applied, const ViewTest* view) const {
   detail::SplitState state = detail::base_state(*pm_);
   for (std::size_t j = 0; j < applied.size(); ++j)
     if (applied[j]) detail::apply_split(*pm_, static_cast<Index>(j), true, state.positions, state.attributes, state.corners);
-  return level_of(state.positions, state.attributes, state.corners, applied, view);
+  std::vector<Index> unfolding;
+  if (view && view->v.unfold) unfolding = unfold(state.positions, state.attributes, state.corners, applied, nullptr);
+  SelectiveLevel out = level_of(state.positions, state.attributes, state.corners, applied, view);
+  out.splits_unfolding = static_cast<Index>(unfolding.size());
+  return out;
+}
+
+bool SelectiveRefiner::folds(Index face, const std::vector<Eigen::Vector3d>& positions, const std::vector<Index>& corners,
+                             const std::vector<char>& applied) const {
+  const std::size_t f = static_cast<std::size_t>(face);
+  if (const Index j = face_split_[f]; j >= 0 && !applied[static_cast<std::size_t>(j)]) return false;  // not shown
+  const Eigen::Vector3d input = input_normal_[f].cast<double>();
+  if (!(input.squaredNorm() > 0)) return false;  // no side to fold to
+  auto at = [&](int k) -> const Eigen::Vector3d& {
+    return positions[static_cast<std::size_t>(pm_->wedge_point[static_cast<std::size_t>(corners[3 * f + static_cast<std::size_t>(k)])])];
+  };
+  return !((at(1) - at(0)).cross(at(2) - at(0)).dot(input) > 0);  // without area counts too
+}
+
+void SelectiveRefiner::append_faces_of(Index split, std::vector<Index>& faces) const {
+  for (Index point : {pm_->splits[static_cast<std::size_t>(split)].point, pm_->base_points + split}) {
+    const std::size_t p = static_cast<std::size_t>(point);
+    faces.insert(faces.end(), point_faces_.begin() + point_face_start_[p], point_faces_.begin() + point_face_start_[p + 1]);
+  }
+}
+
+std::vector<Index> SelectiveRefiner::unfold(std::vector<Eigen::Vector3d>& positions, std::vector<double>& attributes,
+                                            std::vector<Index>& corners, std::vector<char>& applied,
+                                            const std::vector<Index>* check) const {
+  // Round by round: the faces that fold, the next split of each of their corners' points and what it
+  // depends on, applied in order; then only the faces of the points those splits move can fold.
+  const ProgressiveMesh& pm = *pm_;
+  std::vector<Index> all, faces, round, stack;
+  if (check) faces = *check;
+  else for (Index f = 0; f < static_cast<Index>(pm.face_corners.size()); ++f) faces.push_back(f);
+  while (true) {
+    round.clear();
+    for (Index f : faces) {
+      if (!folds(f, positions, corners, applied)) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Index point = pm.wedge_point[static_cast<std::size_t>(corners[3 * static_cast<std::size_t>(f) + static_cast<std::size_t>(k)])];
+        // Its first split not applied (a point's applied splits are the first of its splits).
+        Index j = first_at_point_[static_cast<std::size_t>(point)];
+        while (j >= 0 && applied[static_cast<std::size_t>(j)]) j = next_at_point_[static_cast<std::size_t>(j)];
+        if (j >= 0) stack.push_back(j);
+      }
+    }
+    while (!stack.empty()) {
+      const Index j = stack.back();
+      stack.pop_back();
+      if (applied[static_cast<std::size_t>(j)]) continue;
+      applied[static_cast<std::size_t>(j)] = 1;
+      round.push_back(j);
+      for (Index d : dependencies(j))
+        if (!applied[static_cast<std::size_t>(d)]) stack.push_back(d);
+    }
+    if (round.empty()) break;
+    // In stream order, as refine() applies a set: a split applied later in the stream depends on none of these.
+    std::sort(round.begin(), round.end());
+    faces.clear();
+    for (Index j : round) {
+      detail::apply_split(pm, j, true, positions, attributes, corners);
+      append_faces_of(j, faces);
+    }
+    all.insert(all.end(), round.begin(), round.end());
+  }
+  std::sort(all.begin(), all.end());
+  return all;
 }
 
 SelectiveLevel SelectiveRefiner::level_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <iterator>
 #include <span>
 
 #include "progressive/split_state.h"
@@ -94,20 +95,52 @@ void SelectiveMesh::redo(const std::vector<Index>& splits) {
   }
 }
 
-SelectiveLevel SelectiveMesh::move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
-  const Change c = change_to(wanted);
+SelectiveMesh::Change SelectiveMesh::reach(const std::vector<char>& wanted, bool unfold, Index& unfolding) {
+  Change c = change_to(wanted);
   undo(c.undo);
   redo(c.redo);
+  unfolding = 0;
+  if (!unfold) {
+    fold_free_ = false;
+    return c;
+  }
+  // A state unfolded before can fold only where this change moved points; any other, anywhere. Either
+  // way the same faces fold, so the splits that unfold them are refine_for_view()'s.
+  std::vector<Index> touched;
+  if (fold_free_)
+    for (const std::vector<Index>* splits : {&c.undo, &c.redo})
+      for (Index j : *splits) refiner_->append_faces_of(j, touched);
+  const std::vector<Index> more = refiner_->unfold(positions_, attributes_, corners_, applied_, fold_free_ ? &touched : nullptr);
+  fold_free_ = true;
+  unfolding = static_cast<Index>(more.size());
+  if (more.empty()) return c;
+  // Net of the splits undone and applied again to unfold.
+  Change net;
+  std::vector<Index> fresh;
+  std::set_difference(c.undo.begin(), c.undo.end(), more.begin(), more.end(), std::back_inserter(net.undo));
+  std::set_difference(more.begin(), more.end(), c.undo.begin(), c.undo.end(), std::back_inserter(fresh));
+  std::merge(c.redo.begin(), c.redo.end(), fresh.begin(), fresh.end(), std::back_inserter(net.redo));
+  return net;
+}
+
+SelectiveLevel SelectiveMesh::move_to(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
+  Index unfolding = 0;
+  const Change c = reach(wanted, view && view->v.unfold, unfolding);
   SelectiveLevel out = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
   out.splits_refined = static_cast<Index>(c.redo.size()), out.splits_coarsened = static_cast<Index>(c.undo.size());
+  out.splits_unfolding = unfolding;
   return out;
 }
 
 SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const SelectiveRefiner::ViewTest* view) {
   // Through the union of both sets (closed, as both are): its connectivity, with each vertex's ancestor
-  // in the set before and in the new set.
+  // in the set before and in the new set. Which splits unfold the new set shows once it is reached:
+  // reach it, and go back.
   const ProgressiveMesh& pm = *refiner_->pm_;
-  const Change c = change_to(wanted);
+  Index unfolding = 0;
+  const Change c = reach(wanted, view && view->v.unfold, unfolding);
+  undo(c.redo);
+  redo(c.undo);
   SetAside before(pm, c.redo, positions_, attributes_);
   redo(c.redo);
   SelectiveMorph out;
@@ -132,6 +165,7 @@ SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const Selec
   }
   out.reached = refiner_->level_of(positions_, attributes_, corners_, applied_, view);
   out.reached.splits_refined = static_cast<Index>(c.redo.size()), out.reached.splits_coarsened = static_cast<Index>(c.undo.size());
+  out.reached.splits_unfolding = unfolding;
   g.fine_level = out.reached.splits_applied;
   g.coarse_level = g.fine_level - out.reached.splits_refined + out.reached.splits_coarsened;
   g.start_positions = std::move(start.positions);
@@ -141,16 +175,16 @@ SelectiveMorph SelectiveMesh::morph(const std::vector<char>& wanted, const Selec
   return out;
 }
 
-SelectiveChanges SelectiveMesh::step(const std::vector<char>& wanted) {
+SelectiveChanges SelectiveMesh::step(const std::vector<char>& wanted, bool unfold) {
   // Each split, either way, writes its point's position (so every wedge of the point), the new point's
   // wedges, the values of the wedges it changes, its new faces and the faces whose corners it moves.
   const SelectiveRefiner& r = *refiner_;
   const ProgressiveMesh& pm = *r.pm_;
-  const Change c = change_to(wanted);
-  undo(c.undo);
-  redo(c.redo);
+  Index unfolding = 0;
+  const Change c = reach(wanted, unfold, unfolding);
   SelectiveChanges out;
   out.splits_refined = static_cast<Index>(c.redo.size()), out.splits_coarsened = static_cast<Index>(c.undo.size());
+  out.splits_unfolding = unfolding;
   for (const std::vector<Index>* splits : {&c.undo, &c.redo})
     for (Index j : *splits) {
       const VertexSplit& split = pm.splits[static_cast<std::size_t>(j)];
@@ -200,10 +234,10 @@ SelectiveLevel SelectiveMesh::adapt(const Viewpoint& view, LevelErrorKind kind) 
 
 SelectiveMorph SelectiveMesh::morph_to(std::vector<char> wanted) { return morph(closed(std::move(wanted)), nullptr); }
 
-SelectiveChanges SelectiveMesh::step_to(std::vector<char> wanted) { return step(closed(std::move(wanted))); }
+SelectiveChanges SelectiveMesh::step_to(std::vector<char> wanted) { return step(closed(std::move(wanted)), false); }
 
 SelectiveChanges SelectiveMesh::step_to_view(const Viewpoint& view, LevelErrorKind kind) {
-  return step(SelectiveRefiner::ViewTest(*refiner_, view, kind).wanted());
+  return step(SelectiveRefiner::ViewTest(*refiner_, view, kind).wanted(), view.unfold);
 }
 
 SelectiveMorph SelectiveMesh::morph_to_view(const Viewpoint& view, LevelErrorKind kind) {
