@@ -386,8 +386,14 @@ std::vector<Index> SelectiveRefiner::unfold(std::vector<Eigen::Vector3d>& positi
   // depends on, applied in order; then only the faces of the points those splits move can fold.
   const ProgressiveMesh& pm = *pm_;
   std::vector<Index> all, faces, round, stack;
-  if (check) faces = *check;
-  else for (Index f = 0; f < static_cast<Index>(pm.face_corners.size()); ++f) faces.push_back(f);
+  if (check) {
+    faces = *check;
+  } else {  // the faces shown: the base's and those of the splits applied
+    for (Index f = 0; f < pm.base_faces; ++f) faces.push_back(f);
+    for (std::size_t j = 0; j < applied.size(); ++j)
+      if (applied[j])
+        for (Index f = pm.splits[j].first_face; f < pm.splits[j].first_face + pm.splits[j].num_faces; ++f) faces.push_back(f);
+  }
   while (true) {
     round.clear();
     for (Index f : faces) {
