@@ -442,47 +442,54 @@ std::vector<Viewpoint> views_around(const ProgressiveMesh& pm, double distance) 
 
 TEST(SelectiveRefinement, ViewsRefineWhereMixedLevelsFold) {
   // A split's neighbours can be coarser or finer than in its uniform level, so a face can fold where no
-  // uniform level's does: on a fractal pyramid, close views do. Unfolded, no face folds; the view's own
-  // splits are all applied, with those that unfold counted, and only views that folded need any.
-  const ProgressiveMesh pm = build_progressive_mesh(fractal_pyramid());
-  const SelectiveRefiner refiner(pm);
-  const FoldCount folds(pm, refiner);
-  SelectiveMesh raw(refiner), unfolded(refiner);
-  int folding = 0, views = 0;
-  for (std::size_t n = 0; n <= pm.splits.size(); n += pm.splits.size() / 8) {  // the uniform levels do not fold
-    std::vector<char> prefix(pm.splits.size(), 0);
-    std::fill_n(prefix.begin(), n, 1);
-    raw.go_to(prefix);
-    ASSERT_EQ(folds(raw), 0) << "level " << n;
-  }
-  for (const LevelErrorKind kind : {LevelErrorKind::Bound, LevelErrorKind::Measured})
-    for (double distance : {0.6, 1.2})
-      for (Viewpoint view : views_around(pm, distance)) {
-        const std::string what = fmt::format("view {}", views++);
-        view.pixel_error = 0.5;
-        view.unfold = false;
-        const SelectiveLevel as_is = raw.adapt(view, kind);
-        const Index folded = folds(raw);
-        ASSERT_EQ(raw.applied(), refiner.splits_for_view(view, kind)) << what;
-        EXPECT_EQ(as_is.splits_unfolding, 0) << what;
-        view.unfold = true;
-        const SelectiveLevel s = unfolded.adapt(view, kind);
-        expect_same_level(s, refiner.refine_for_view(view, kind), what);
-        EXPECT_EQ(folds(unfolded), 0) << what << ": " << folded << " folded";
-        Index more = 0;
-        for (std::size_t j = 0; j < pm.splits.size(); ++j) {
-          ASSERT_TRUE(unfolded.applied()[j] || !raw.applied()[j]) << what;
-          more += unfolded.applied()[j] && !raw.applied()[j];
-          if (unfolded.applied()[j]) {
-            for (Index d : refiner.dependencies(Index(j))) ASSERT_TRUE(unfolded.applied()[std::size_t(d)]) << what;
+  // uniform level's does: close views of a fractal pyramid fold faces against their own input faces,
+  // and of a very bumpy sphere against the input faces nearest them (compare's count). Unfolded, no
+  // face does either; the view's own splits are all applied, with those that unfold counted, and only
+  // views that folded need any.
+  for (const Mesh& shape : {fractal_pyramid(), test::bumpy_sphere(4, 0.15)}) {
+    const ProgressiveMesh pm = build_progressive_mesh(shape);
+    const SelectiveRefiner refiner(pm);
+    const FoldCount folds(pm, refiner);
+    const Mesh input = extract_level(pm, pm.max_level()).mesh;
+    SelectiveMesh raw(refiner), unfolded(refiner);
+    for (std::size_t n = 0; n <= pm.splits.size(); n += pm.splits.size() / 8) {  // the uniform levels do not fold
+      std::vector<char> prefix(pm.splits.size(), 0);
+      std::fill_n(prefix.begin(), n, 1);
+      raw.go_to(prefix);
+      ASSERT_EQ(folds(raw), 0) << "level " << n;
+    }
+    int folding = 0, views = 0;
+    for (const LevelErrorKind kind : {LevelErrorKind::Bound, LevelErrorKind::Measured})
+      for (double distance : {0.6, 1.2})
+        for (Viewpoint view : views_around(pm, distance)) {
+          const std::string what = fmt::format("{} faces, view {}", shape.num_faces(), views++);
+          view.pixel_error = 0.5;
+          view.unfold = false;
+          const SelectiveLevel as_is = raw.adapt(view, kind);
+          const Index folded = folds(raw), against = count_flipped_faces(input, as_is.extracted.mesh);
+          ASSERT_EQ(raw.applied(), refiner.splits_for_view(view, kind)) << what;
+          EXPECT_EQ(as_is.splits_unfolding, 0) << what;
+          view.unfold = true;
+          const SelectiveLevel s = unfolded.adapt(view, kind);
+          expect_same_level(s, refiner.refine_for_view(view, kind), what);
+          EXPECT_EQ(folds(unfolded), 0) << what << ": " << folded << " folded";
+          // (Faces as a uniform level has them are left so; none of those shown here faces against.)
+          EXPECT_EQ(count_flipped_faces(input, s.extracted.mesh), 0) << what << ": " << against << " against";
+          Index more = 0;
+          for (std::size_t j = 0; j < pm.splits.size(); ++j) {
+            ASSERT_TRUE(unfolded.applied()[j] || !raw.applied()[j]) << what;
+            more += unfolded.applied()[j] && !raw.applied()[j];
+            if (unfolded.applied()[j]) {
+              for (Index d : refiner.dependencies(Index(j))) ASSERT_TRUE(unfolded.applied()[std::size_t(d)]) << what;
+            }
           }
+          EXPECT_EQ(s.splits_unfolding, more) << what;
+          EXPECT_EQ(s.splits_applied, as_is.splits_applied + more) << what;
+          EXPECT_EQ(more > 0, folded + against > 0) << what;
+          folding += folded + against > 0;
         }
-        EXPECT_EQ(s.splits_unfolding, more) << what;
-        EXPECT_EQ(s.splits_applied, as_is.splits_applied + more) << what;
-        EXPECT_EQ(more > 0, folded > 0) << what;
-        folding += folded > 0;
-      }
-  EXPECT_GE(folding, 4) << "of " << views << " views";  // the test needs views that fold
+    EXPECT_GE(folding, 4) << "of " << views << " views of " << shape.num_faces() << " faces";  // the test needs views that fold
+  }
 }
 
 TEST(SelectiveMesh, EveryStateIsTheSetsMeshWhateverCameBefore) {

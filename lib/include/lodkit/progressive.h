@@ -23,6 +23,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -327,11 +328,12 @@ struct SelectiveLevel {
 /// damaged stream's valid part) adds its last level's error from the input to both.
 ///
 /// Folds. A split's neighbours may be coarser or finer than in its uniform level, so a face of a
-/// selective mesh can face against its own face in the input, which no uniform level's face does (the
-/// simplifier's turn limit). A view (Viewpoint::unfold, the default) then applies, round by round, the
-/// next split of each corner of every face that folds, and their dependencies, until none does: every
-/// split moves a point towards the input, whose faces do not fold, so it ends. The result depends on
-/// the view's set alone, however the mesh got there.
+/// selective mesh can fold: face against its own face in the input, or against every input face
+/// nearest its centroid (count_flipped_faces()'s rule), which no face of a uniform level does when the
+/// simplifier avoided both (its defaults). A view (Viewpoint::unfold, the default) then applies, round
+/// by round, the next split of each corner of every face that folds, and their dependencies, until
+/// none does: every split moves a point towards the input, whose faces do not fold, so it ends. The
+/// result depends on the view's set alone, however the mesh got there.
 class SelectiveRefiner {
  public:
   /// Finds every split's dependencies and region (time and memory linear in the stream). `pm` must
@@ -365,7 +367,8 @@ class SelectiveRefiner {
 
  private:
   friend class SelectiveMesh;
-  struct ViewTest;  // a view's tests of a region (selective.cpp)
+  struct ViewTest;     // a view's tests of a region (selective.cpp)
+  struct InputFacing;  // the input's faces and their tree, for telling faces facing against it (selective.cpp)
   void check_size(const std::vector<char>& wanted) const;  // one entry per split
   void close(std::vector<char>& wanted) const;             // adds every dependency
   /// Per point that exists, its first split not applied: the regions left coarse.
@@ -374,14 +377,21 @@ class SelectiveRefiner {
   /// point it makes (-1 where there is none).
   std::array<Index, 2> below(Index split) const;
   SelectiveLevel apply_closed(std::vector<char> applied, const ViewTest* view) const;  // from the base
-  /// Whether face `face` of the state folds: shown, facing against its input face (which has area).
+  /// The uniform levels in which a point stands where it does now, first and last: from just after its
+  /// last split applied (or the one that made it) to its next split (the splits of a point applied
+  /// are the first of its splits). Per point, for the closed set `applied`; and as split `split` is
+  /// applied or undone.
+  using LevelSpan = std::array<Index, 2>;
+  std::vector<LevelSpan> level_spans(const std::vector<char>& applied) const;
+  LevelSpan span_after(Index split, bool applied) const;
+  /// Whether face `face` of the state folds (see the class comment); `spans` as level_spans() gives.
   bool folds(Index face, const std::vector<Eigen::Vector3d>& positions, const std::vector<Index>& corners,
-             const std::vector<char>& applied) const;
+             const std::vector<char>& applied, const std::vector<LevelSpan>& spans) const;
   /// Applies to the state of the closed set `applied` the splits that unfold its faces, where every
   /// face that can fold is among `check` (the faces of the points of the splits that changed since the
-  /// state had none) or, with `check` null, anywhere. Returns them, ascending.
+  /// state had none) or, with `check` null, anywhere. Keeps `spans` up to date. Returns them, ascending.
   std::vector<Index> unfold(std::vector<Eigen::Vector3d>& positions, std::vector<double>& attributes, std::vector<Index>& corners,
-                            std::vector<char>& applied, const std::vector<Index>* check) const;
+                            std::vector<char>& applied, std::vector<LevelSpan>& spans, const std::vector<Index>* check) const;
   /// Appends the faces that ever have a corner at split `split`'s two points.
   void append_faces_of(Index split, std::vector<Index>& faces) const;
   /// The mesh of the closed set `applied` from the state's arrays, in stream order.
@@ -398,13 +408,15 @@ class SelectiveRefiner {
 
   const ProgressiveMesh* pm_;
   std::vector<Index> dependency_start_, dependencies_;  // CSR: split j's are [start[j], start[j + 1])
-  std::vector<Index> next_at_point_;   // per split: the next split of its point, or -1
-  std::vector<Index> first_at_point_;  // per point: its first split, or -1
+  std::vector<Index> next_at_point_;      // per split: the next split of its point, or -1
+  std::vector<Index> previous_at_point_;  // per split: the split of its point before, or -1
+  std::vector<Index> first_at_point_;     // per point: its first split, or -1
   std::vector<Index> wedge_split_;     // per wedge: the split that makes it, or -1 (the base's)
   std::vector<Index> face_split_;      // per face: the split that opens it, or -1 (the base's)
   std::vector<Index> point_wedge_start_, point_wedges_;  // CSR: each point's wedges
   std::vector<Index> point_face_start_, point_faces_;    // CSR: the faces ever with a corner at each point
   std::vector<Eigen::Vector3f> input_normal_;            // per face: its normal at the finest level (unscaled)
+  std::shared_ptr<const InputFacing> input_;
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_, deviation_;
   double beyond_bound_ = 0, beyond_deviation_ = 0;  // the last level's bound and measured error (0 when it is the input)
@@ -490,6 +502,7 @@ class SelectiveMesh {
   std::vector<double> attributes_;
   std::vector<Index> corners_;
   std::vector<char> applied_;
+  std::vector<SelectiveRefiner::LevelSpan> spans_;  // per point (SelectiveRefiner::level_spans())
   bool fold_free_ = false;  // whether the state was unfolded: only faces a change touches can fold
 };
 

@@ -19,10 +19,19 @@
 #include <numbers>
 
 #include "core/geometry.h"
+#include "metrics/aabb_tree.h"
 #include "progressive/split_state.h"
 #include "progressive/view_test.h"
 
 namespace lodkit {
+
+// The input (the finest level) and its tree, readied to tell which way the face nearest a point faces.
+struct SelectiveRefiner::InputFacing {
+  Mesh mesh;
+  detail::AabbTree tree;  // over `mesh`, which it refers to
+  explicit InputFacing(Mesh input) : mesh(std::move(input)), tree(mesh, {.copy_corners = false}) { tree.prepare_facing(); }
+};
+
 namespace {
 
 // Whether any of the eight flags from `at` is set.
@@ -62,6 +71,7 @@ struct UniformWalk {
   std::vector<double> local;  // the distance between s's faces before and after the split, at samples
   std::vector<detail::NormalCone> cone;  // the normals of s's faces before and after the split
   std::vector<Eigen::Vector3f> input_normal;  // per face, at the finest level (unscaled)
+  Mesh input;  // the finest level: a vertex per point, faces numbered as the stream's
 };
 
 // A point's faces (three corners each) and, when asked, samples on them: the point, its edges'
@@ -178,7 +188,11 @@ UniformWalk walk_uniform_sequence(const ProgressiveMesh& pm) {
     if (local <= rounding) local = 0;  // a split within a plane (else an eye inside its ball refines it)
   }
   walk.input_normal.resize(pm.face_corners.size());
+  walk.input.positions.resize(static_cast<Index>(points), 3);
+  for (std::size_t p = 0; p < points; ++p) walk.input.positions.row(static_cast<Index>(p)) = state.positions[p].transpose();
+  walk.input.triangles.resize(static_cast<Index>(pm.face_corners.size()), 3);
   for (std::size_t f = 0; f < pm.face_corners.size(); ++f) {
+    for (int k = 0; k < 3; ++k) walk.input.triangles(static_cast<Index>(f), k) = point_of(state.corners[3 * f + static_cast<std::size_t>(k)]);
     auto at = [&](int k) -> const Eigen::Vector3d& { return state.positions[static_cast<std::size_t>(point_of(state.corners[3 * f + k]))]; };
     walk.input_normal[f] = (at(1) - at(0)).cross(at(2) - at(0)).cast<float>();
   }
@@ -224,6 +238,7 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
     if (const Index previous = walk.previous_at_point[j]; previous >= 0) next_at_point_[static_cast<std::size_t>(previous)] = static_cast<Index>(j);
     first_at_point_[static_cast<std::size_t>(pm.splits[j].point)] = static_cast<Index>(j);
   }
+  previous_at_point_ = std::move(walk.previous_at_point);
   // Which split makes each wedge and opens each face, and each point's wedges (for kept meshes).
   wedge_split_.assign(pm.wedge_point.size(), -1);
   face_split_.assign(pm.face_corners.size(), -1);
@@ -241,6 +256,7 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
   // The faces ever with a corner at each point: those it starts with and those a split moves to or
   // from it (a face's corners change only so), for finding the faces a split can fold.
   input_normal_ = std::move(walk.input_normal);
+  input_ = std::make_shared<const InputFacing>(std::move(walk.input));
   {
     std::vector<std::pair<Index, Index>> at;  // (point, face)
     at.reserve(3 * pm.face_corners.size() + 2 * pm.corner_changes.size());
@@ -354,22 +370,60 @@ SelectiveLevel SelectiveRefiner::apply_closed(std::vector<char> applied, const V
   for (std::size_t j = 0; j < applied.size(); ++j)
     if (applied[j]) detail::apply_split(*pm_, static_cast<Index>(j), true, state.positions, state.attributes, state.corners);
   std::vector<Index> unfolding;
-  if (view && view->v.unfold) unfolding = unfold(state.positions, state.attributes, state.corners, applied, nullptr);
+  if (view && view->v.unfold) {
+    std::vector<LevelSpan> spans = level_spans(applied);
+    unfolding = unfold(state.positions, state.attributes, state.corners, applied, spans, nullptr);
+  }
   SelectiveLevel out = level_of(state.positions, state.attributes, state.corners, applied, view);
   out.splits_unfolding = static_cast<Index>(unfolding.size());
   return out;
 }
 
+std::vector<SelectiveRefiner::LevelSpan> SelectiveRefiner::level_spans(const std::vector<char>& applied) const {
+  const ProgressiveMesh& pm = *pm_;
+  const Index n = static_cast<Index>(pm.splits.size());
+  std::vector<LevelSpan> spans(first_at_point_.size());
+  for (std::size_t p = 0; p < spans.size(); ++p) {
+    const Index made_by = static_cast<Index>(p) >= pm.base_points ? static_cast<Index>(p) - pm.base_points : -1;
+    spans[p] = {made_by + 1, first_at_point_[p] >= 0 ? first_at_point_[p] : n};
+  }
+  for (std::size_t j = 0; j < applied.size(); ++j)
+    if (applied[j]) spans[static_cast<std::size_t>(pm.splits[j].point)] = span_after(static_cast<Index>(j), true);
+  return spans;
+}
+
+SelectiveRefiner::LevelSpan SelectiveRefiner::span_after(Index split, bool applied) const {
+  const std::size_t j = static_cast<std::size_t>(split);
+  if (applied) return {split + 1, next_at_point_[j] >= 0 ? next_at_point_[j] : static_cast<Index>(pm_->splits.size())};
+  const Index before = previous_at_point_[j], point = pm_->splits[j].point;
+  const Index made_by = point >= pm_->base_points ? point - pm_->base_points : -1;
+  return {(before >= 0 ? before : made_by) + 1, split};
+}
+
 bool SelectiveRefiner::folds(Index face, const std::vector<Eigen::Vector3d>& positions, const std::vector<Index>& corners,
-                             const std::vector<char>& applied) const {
+                             const std::vector<char>& applied, const std::vector<LevelSpan>& spans) const {
+  const ProgressiveMesh& pm = *pm_;
   const std::size_t f = static_cast<std::size_t>(face);
-  if (const Index j = face_split_[f]; j >= 0 && !applied[static_cast<std::size_t>(j)]) return false;  // not shown
-  const Eigen::Vector3d input = input_normal_[f].cast<double>();
-  if (!(input.squaredNorm() > 0)) return false;  // no side to fold to
-  auto at = [&](int k) -> const Eigen::Vector3d& {
-    return positions[static_cast<std::size_t>(pm_->wedge_point[static_cast<std::size_t>(corners[3 * f + static_cast<std::size_t>(k)])])];
-  };
-  return !((at(1) - at(0)).cross(at(2) - at(0)).dot(input) > 0);  // without area counts too
+  const Index opened = face_split_[f];
+  if (opened >= 0 && !applied[static_cast<std::size_t>(opened)]) return false;  // not shown
+  // The uniform levels that hold the face as it is: those in which each corner's point stands where it
+  // does (its corners change only with its splits). A face a uniform level has folds there or nowhere:
+  // left as the level has it.
+  Index lowest = opened + 1, highest = static_cast<Index>(pm.splits.size());
+  std::array<Index, 3> point;
+  for (std::size_t k = 0; k < 3; ++k) {
+    point[k] = pm.wedge_point[static_cast<std::size_t>(corners[3 * f + k])];
+    const LevelSpan& span = spans[static_cast<std::size_t>(point[k])];
+    lowest = std::max(lowest, span[0]), highest = std::min(highest, span[1]);
+  }
+  if (lowest <= highest) return false;
+  auto at = [&](std::size_t k) -> const Eigen::Vector3d& { return positions[static_cast<std::size_t>(point[k])]; };
+  const Eigen::Vector3d normal = (at(1) - at(0)).cross(at(2) - at(0)), input = input_normal_[f].cast<double>();
+  if (input.squaredNorm() > 0 && !(normal.dot(input) > 0)) return true;  // against its own face (or without area)
+  // Against the input's faces nearest its centroid, starting from its own (so that the answer, exact
+  // up to the rounding of distances, is the same whichever state asks).
+  Index hint = face;
+  return input_->tree.facing_against_all_nearest((at(0) + at(1) + at(2)) / 3.0, normal, hint);
 }
 
 void SelectiveRefiner::append_faces_of(Index split, std::vector<Index>& faces) const {
@@ -381,7 +435,7 @@ void SelectiveRefiner::append_faces_of(Index split, std::vector<Index>& faces) c
 
 std::vector<Index> SelectiveRefiner::unfold(std::vector<Eigen::Vector3d>& positions, std::vector<double>& attributes,
                                             std::vector<Index>& corners, std::vector<char>& applied,
-                                            const std::vector<Index>* check) const {
+                                            std::vector<LevelSpan>& spans, const std::vector<Index>* check) const {
   // Round by round: the faces that fold, the next split of each of their corners' points and what it
   // depends on, applied in order; then only the faces of the points those splits move can fold.
   const ProgressiveMesh& pm = *pm_;
@@ -397,13 +451,10 @@ std::vector<Index> SelectiveRefiner::unfold(std::vector<Eigen::Vector3d>& positi
   while (true) {
     round.clear();
     for (Index f : faces) {
-      if (!folds(f, positions, corners, applied)) continue;
-      for (int k = 0; k < 3; ++k) {
-        const Index point = pm.wedge_point[static_cast<std::size_t>(corners[3 * static_cast<std::size_t>(f) + static_cast<std::size_t>(k)])];
-        // Its first split not applied (a point's applied splits are the first of its splits).
-        Index j = first_at_point_[static_cast<std::size_t>(point)];
-        while (j >= 0 && applied[static_cast<std::size_t>(j)]) j = next_at_point_[static_cast<std::size_t>(j)];
-        if (j >= 0) stack.push_back(j);
+      if (!folds(f, positions, corners, applied, spans)) continue;
+      for (std::size_t k = 0; k < 3; ++k) {  // each corner's next split, where it has one
+        const Index point = pm.wedge_point[static_cast<std::size_t>(corners[3 * static_cast<std::size_t>(f) + k])];
+        if (const Index j = spans[static_cast<std::size_t>(point)][1]; j < static_cast<Index>(pm.splits.size())) stack.push_back(j);
       }
     }
     while (!stack.empty()) {
@@ -421,6 +472,7 @@ std::vector<Index> SelectiveRefiner::unfold(std::vector<Eigen::Vector3d>& positi
     faces.clear();
     for (Index j : round) {
       detail::apply_split(pm, j, true, positions, attributes, corners);
+      spans[static_cast<std::size_t>(pm.splits[static_cast<std::size_t>(j)].point)] = span_after(j, true);
       append_faces_of(j, faces);
     }
     all.insert(all.end(), round.begin(), round.end());

@@ -63,6 +63,7 @@ SelectiveMesh::SelectiveMesh(const SelectiveRefiner& refiner) : refiner_(&refine
   attributes_ = std::move(base.attributes);
   corners_ = std::move(base.corners);
   applied_.assign(refiner.pm_->splits.size(), 0);
+  spans_ = refiner.level_spans(applied_);
 }
 
 SelectiveMesh::Change SelectiveMesh::change_to(const std::vector<char>& wanted) const {
@@ -85,6 +86,7 @@ void SelectiveMesh::undo(const std::vector<Index>& splits) {
   for (auto j = splits.rbegin(); j != splits.rend(); ++j) {
     detail::apply_split(*refiner_->pm_, *j, false, positions_, attributes_, corners_);
     applied_[static_cast<std::size_t>(*j)] = 0;
+    spans_[static_cast<std::size_t>(refiner_->pm_->splits[static_cast<std::size_t>(*j)].point)] = refiner_->span_after(*j, false);
   }
 }
 
@@ -92,6 +94,7 @@ void SelectiveMesh::redo(const std::vector<Index>& splits) {
   for (Index j : splits) {
     detail::apply_split(*refiner_->pm_, j, true, positions_, attributes_, corners_);
     applied_[static_cast<std::size_t>(j)] = 1;
+    spans_[static_cast<std::size_t>(refiner_->pm_->splits[static_cast<std::size_t>(j)].point)] = refiner_->span_after(j, true);
   }
 }
 
@@ -110,7 +113,7 @@ SelectiveMesh::Change SelectiveMesh::reach(const std::vector<char>& wanted, bool
   if (fold_free_)
     for (const std::vector<Index>* splits : {&c.undo, &c.redo})
       for (Index j : *splits) refiner_->append_faces_of(j, touched);
-  const std::vector<Index> more = refiner_->unfold(positions_, attributes_, corners_, applied_, fold_free_ ? &touched : nullptr);
+  const std::vector<Index> more = refiner_->unfold(positions_, attributes_, corners_, applied_, spans_, fold_free_ ? &touched : nullptr);
   fold_free_ = true;
   unfolding = static_cast<Index>(more.size());
   if (more.empty()) return c;
