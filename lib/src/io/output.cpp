@@ -7,7 +7,10 @@
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
+#include <csignal>
 #include <fmt/format.h>
+#include <optional>
+#include <pthread.h>
 #include <random>
 #include <unistd.h>
 
@@ -86,9 +89,19 @@ void write_file_atomically(const std::filesystem::path& path,
   hidden_name += path.filename().string();
   hidden_name += ".tmp-";
   std::string tmpl;
+  // Created and tracked with the stopping signals held back: one that came between the two would find
+  // the file untracked and leave it behind (CI caught that once). A signal held back meanwhile arrives
+  // once the file is tracked.
+  sigset_t stopping, before;
+  sigemptyset(&stopping);
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&stopping, signal);
+  pthread_sigmask(SIG_BLOCK, &stopping, &before);
   const int fd = create_temporary((dir / hidden_name).string(), tmpl);
-  if (fd < 0) throw Error(fmt::format("{}: cannot create a file there: {}", name, std::strerror(errno)));
-  const UnfinishedOutput tracked(tmpl.c_str());
+  const int created_errno = errno;
+  std::optional<UnfinishedOutput> tracked;
+  if (fd >= 0) tracked.emplace(tmpl.c_str());
+  pthread_sigmask(SIG_SETMASK, &before, nullptr);
+  if (fd < 0) throw Error(fmt::format("{}: cannot create a file there: {}", name, std::strerror(created_errno)));
   std::FILE* file = ::fdopen(fd, "wb");
   if (!file) {
     ::close(fd);
