@@ -610,8 +610,8 @@ Examples:
   extract->add_flag("--cull-backfaces", opt->cull_backfaces,
                     "With --eye: leave regions facing away from the eye coarse (closed meshes: hidden behind the front)");
   extract->add_flag("--allow-folds", opt->allow_folds,
-                    "With --eye: leave faces that fold (face against their own input face, where splits of different "
-                    "levels meet) as they are, instead of refining further until none does");
+                    "With --eye: leave faces that fold (face against the input, where splits of different levels "
+                    "meet) as they are, instead of refining further until none does");
   extract->add_flag("--input-order", opt->input_order, "Vertices and faces in input order (reads the whole file)");
   extract->add_flag("--certified", opt->certified, "Select by the collapses' own guaranteed bound (4-50x looser) even when the stream has measured errors");
   extract->add_option("--prove-with", opt->prove_with,
@@ -630,8 +630,8 @@ With --eye, each region of the mesh is refined on its own (selective refinement)
 from the eye to the region, whose error is its measured deviation (its guaranteed bound with
 --certified); regions outside the view cone stay coarse unless --no-cull, and so do regions facing
 away with --cull-backfaces. Where splits of different levels meet, a face can fold (face against its
-own face in the input, as no uniform level's does): the mesh is refined further there until none
-does, unless --allow-folds. --eye-path does so for each line of a file (a camera path), keeping one
+own face in the input, or the input faces nearest it, as no uniform level's does): the mesh is refined
+further there until none does, unless --allow-folds. --eye-path does so for each line of a file (a camera path), keeping one
 mesh from view to view: each view applies and undoes only the splits that change. With
 --morph-frames K the change from one view to the next blends in over K frames (Hoppe 1997's
 geomorphs, refining and coarsening at once): K - 1 frames morph from the view before to the next,
