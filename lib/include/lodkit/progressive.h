@@ -415,8 +415,7 @@ class SelectiveRefiner {
   std::vector<Index> face_split_;      // per face: the split that opens it, or -1 (the base's)
   std::vector<Index> point_wedge_start_, point_wedges_;  // CSR: each point's wedges
   std::vector<Index> point_face_start_, point_faces_;    // CSR: the faces ever with a corner at each point
-  std::vector<Eigen::Vector3f> input_normal_;            // per face: its normal at the finest level (unscaled)
-  std::shared_ptr<const InputFacing> input_;
+  std::shared_ptr<const InputFacing> input_;            // the finest level, for faces that fold
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_, deviation_;
   double beyond_bound_ = 0, beyond_deviation_ = 0;  // the last level's bound and measured error (0 when it is the input)

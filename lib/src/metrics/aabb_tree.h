@@ -56,6 +56,8 @@ class AabbTree {
 
   /// Readies facing_against(): each face's unit normal and each node's cone of normals.
   void prepare_facing();
+  /// Face f's normal: unit where prepare_facing() ran (zero without area), else its corners' cross product.
+  Eigen::Vector3d face_normal(Index f) const;
   /// Whether `normal` faces against (negative dot with) the normal of the face closest(p) finds; a
   /// face without area faces neither way. `hint`: a face near p, or -1; on return, a face near p to
   /// start from next time (the nearest, where there was none). Where the faces around the hint all lie
@@ -154,8 +156,6 @@ class AabbTree {
   static int leaf_code(const Node& leaf) { return -1 - (leaf.first * 4 + leaf.count - 1); }
   /// The closest point to p on face f.
   Eigen::Vector3d closest_on_face(const Eigen::Vector3d& p, Index f) const;
-  /// Face f's normal: unit where prepare_facing() ran, else its corners' cross product.
-  Eigen::Vector3d face_normal(Index f) const;
   /// Appends the quad of inner node `node`, and those below it; returns its index.
   int build_quad(int node);
   /// Lane `lane` of `quad` as node `node`'s box, in floats rounded outwards.

@@ -70,7 +70,6 @@ struct UniformWalk {
   std::vector<Index> start, dependencies, previous_at_point;
   std::vector<double> local;  // the distance between s's faces before and after the split, at samples
   std::vector<detail::NormalCone> cone;  // the normals of s's faces before and after the split
-  std::vector<Eigen::Vector3f> input_normal;  // per face, at the finest level (unscaled)
   Mesh input;  // the finest level: a vertex per point, faces numbered as the stream's
 };
 
@@ -187,15 +186,11 @@ UniformWalk walk_uniform_sequence(const ProgressiveMesh& pm) {
     }
     if (local <= rounding) local = 0;  // a split within a plane (else an eye inside its ball refines it)
   }
-  walk.input_normal.resize(pm.face_corners.size());
   walk.input.positions.resize(static_cast<Index>(points), 3);
   for (std::size_t p = 0; p < points; ++p) walk.input.positions.row(static_cast<Index>(p)) = state.positions[p].transpose();
   walk.input.triangles.resize(static_cast<Index>(pm.face_corners.size()), 3);
-  for (std::size_t f = 0; f < pm.face_corners.size(); ++f) {
+  for (std::size_t f = 0; f < pm.face_corners.size(); ++f)
     for (int k = 0; k < 3; ++k) walk.input.triangles(static_cast<Index>(f), k) = point_of(state.corners[3 * f + static_cast<std::size_t>(k)]);
-    auto at = [&](int k) -> const Eigen::Vector3d& { return state.positions[static_cast<std::size_t>(point_of(state.corners[3 * f + k]))]; };
-    walk.input_normal[f] = (at(1) - at(0)).cross(at(2) - at(0)).cast<float>();
-  }
   return walk;
 }
 
@@ -255,7 +250,6 @@ SelectiveRefiner::SelectiveRefiner(const ProgressiveMesh& pm) : pm_(&pm) {
     point_wedges_[static_cast<std::size_t>(next[static_cast<std::size_t>(pm.wedge_point[w])]++)] = static_cast<Index>(w);
   // The faces ever with a corner at each point: those it starts with and those a split moves to or
   // from it (a face's corners change only so), for finding the faces a split can fold.
-  input_normal_ = std::move(walk.input_normal);
   input_ = std::make_shared<const InputFacing>(std::move(walk.input));
   {
     std::vector<std::pair<Index, Index>> at;  // (point, face)
@@ -418,7 +412,7 @@ bool SelectiveRefiner::folds(Index face, const std::vector<Eigen::Vector3d>& pos
   }
   if (lowest <= highest) return false;
   auto at = [&](std::size_t k) -> const Eigen::Vector3d& { return positions[static_cast<std::size_t>(point[k])]; };
-  const Eigen::Vector3d normal = (at(1) - at(0)).cross(at(2) - at(0)), input = input_normal_[f].cast<double>();
+  const Eigen::Vector3d normal = (at(1) - at(0)).cross(at(2) - at(0)), input = input_->tree.face_normal(face);
   if (input.squaredNorm() > 0 && !(normal.dot(input) > 0)) return true;  // against its own face (or without area)
   // Against the input's faces nearest its centroid, starting from its own (so that the answer, exact
   // up to the rounding of distances, is the same whichever state asks).
