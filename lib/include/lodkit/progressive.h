@@ -382,6 +382,8 @@ class SelectiveRefiner {
   /// are the first of its splits). Per point, for the closed set `applied`; and as split `split` is
   /// applied or undone.
   using LevelSpan = std::array<Index, 2>;
+  /// The split that makes point `point`, or -1 for the base's.
+  Index made_by(Index point) const { return point >= pm_->base_points ? point - pm_->base_points : -1; }
   std::vector<LevelSpan> level_spans(const std::vector<char>& applied) const;
   LevelSpan span_after(Index split, bool applied) const;
   /// Whether face `face` of the state folds (see the class comment); `spans` as level_spans() gives.
@@ -394,6 +396,8 @@ class SelectiveRefiner {
                             std::vector<char>& applied, std::vector<LevelSpan>& spans, const std::vector<Index>* check) const;
   /// Appends the faces that ever have a corner at split `split`'s two points.
   void append_faces_of(Index split, std::vector<Index>& faces) const;
+  /// The faces the closed set `applied` shows, by number: the base's, then those each split opens.
+  std::vector<Index> shown_faces(const std::vector<char>& applied) const;
   /// The mesh of the closed set `applied` from the state's arrays, in stream order.
   ExtractedLevel mesh_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
                          const std::vector<Index>& corners, const std::vector<char>& applied) const;

@@ -5,9 +5,9 @@
 
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <fcntl.h>
-#include <csignal>
 #include <fmt/format.h>
 #include <optional>
 #include <pthread.h>

@@ -373,14 +373,22 @@ SelectiveLevel SelectiveRefiner::apply_closed(std::vector<char> applied, const V
   return out;
 }
 
+std::vector<Index> SelectiveRefiner::shown_faces(const std::vector<char>& applied) const {
+  const ProgressiveMesh& pm = *pm_;
+  std::vector<Index> faces(static_cast<std::size_t>(pm.base_faces));
+  for (Index f = 0; f < pm.base_faces; ++f) faces[static_cast<std::size_t>(f)] = f;
+  for (std::size_t j = 0; j < applied.size(); ++j)
+    if (applied[j])
+      for (Index f = pm.splits[j].first_face; f < pm.splits[j].first_face + pm.splits[j].num_faces; ++f) faces.push_back(f);
+  return faces;
+}
+
 std::vector<SelectiveRefiner::LevelSpan> SelectiveRefiner::level_spans(const std::vector<char>& applied) const {
   const ProgressiveMesh& pm = *pm_;
   const Index n = static_cast<Index>(pm.splits.size());
   std::vector<LevelSpan> spans(first_at_point_.size());
-  for (std::size_t p = 0; p < spans.size(); ++p) {
-    const Index made_by = static_cast<Index>(p) >= pm.base_points ? static_cast<Index>(p) - pm.base_points : -1;
-    spans[p] = {made_by + 1, first_at_point_[p] >= 0 ? first_at_point_[p] : n};
-  }
+  for (std::size_t p = 0; p < spans.size(); ++p)
+    spans[p] = {made_by(static_cast<Index>(p)) + 1, first_at_point_[p] >= 0 ? first_at_point_[p] : n};
   for (std::size_t j = 0; j < applied.size(); ++j)
     if (applied[j]) spans[static_cast<std::size_t>(pm.splits[j].point)] = span_after(static_cast<Index>(j), true);
   return spans;
@@ -389,9 +397,8 @@ std::vector<SelectiveRefiner::LevelSpan> SelectiveRefiner::level_spans(const std
 SelectiveRefiner::LevelSpan SelectiveRefiner::span_after(Index split, bool applied) const {
   const std::size_t j = static_cast<std::size_t>(split);
   if (applied) return {split + 1, next_at_point_[j] >= 0 ? next_at_point_[j] : static_cast<Index>(pm_->splits.size())};
-  const Index before = previous_at_point_[j], point = pm_->splits[j].point;
-  const Index made_by = point >= pm_->base_points ? point - pm_->base_points : -1;
-  return {(before >= 0 ? before : made_by) + 1, split};
+  const Index before = previous_at_point_[j];
+  return {(before >= 0 ? before : made_by(pm_->splits[j].point)) + 1, split};
 }
 
 bool SelectiveRefiner::folds(Index face, const std::vector<Eigen::Vector3d>& positions, const std::vector<Index>& corners,
@@ -434,14 +441,7 @@ std::vector<Index> SelectiveRefiner::unfold(std::vector<Eigen::Vector3d>& positi
   // depends on, applied in order; then only the faces of the points those splits move can fold.
   const ProgressiveMesh& pm = *pm_;
   std::vector<Index> all, faces, round, stack;
-  if (check) {
-    faces = *check;
-  } else {  // the faces shown: the base's and those of the splits applied
-    for (Index f = 0; f < pm.base_faces; ++f) faces.push_back(f);
-    for (std::size_t j = 0; j < applied.size(); ++j)
-      if (applied[j])
-        for (Index f = pm.splits[j].first_face; f < pm.splits[j].first_face + pm.splits[j].num_faces; ++f) faces.push_back(f);
-  }
+  faces = check ? *check : shown_faces(applied);
   while (true) {
     round.clear();
     for (Index f : faces) {
@@ -494,16 +494,11 @@ SelectiveLevel SelectiveRefiner::level_of(const std::vector<Eigen::Vector3d>& po
 
 ExtractedLevel SelectiveRefiner::mesh_of(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& attributes,
                                          const std::vector<Index>& corners, const std::vector<char>& applied) const {
-  // Faces by number (the base's, then those each applied split opens), then the wedges they use by number.
+  // Faces by number, then the wedges they use by number.
   const ProgressiveMesh& pm = *pm_;
-  std::vector<Index> faces(static_cast<std::size_t>(pm.base_faces));
-  for (Index f = 0; f < pm.base_faces; ++f) faces[static_cast<std::size_t>(f)] = f;
+  const std::vector<Index> faces = shown_faces(applied);
   ExtractedLevel e;
-  for (std::size_t j = 0; j < applied.size(); ++j) {
-    if (!applied[j]) continue;
-    for (Index f = pm.splits[j].first_face; f < pm.splits[j].first_face + pm.splits[j].num_faces; ++f) faces.push_back(f);
-    ++e.level;
-  }
+  e.level = static_cast<Index>(std::count(applied.begin(), applied.end(), 1));
   const std::size_t wedges = pm.wedge_point.size();
   std::vector<char> used(wedges, 0);
   for (Index f : faces)
