@@ -291,6 +291,35 @@ TEST(AabbTree, ClosestFacingMatchesBruteForce) {
   EXPECT_EQ(tree.closest_facing(corner(one, 0, 0), n).face, 0);
 }
 
+// A quad's empty lane (beside a child that is a leaf) has a box at infinity. A search whose bound is
+// still infinite (no face found yet, or none facing the way asked) pushed it and entered it as node -1,
+// reading the side test before the first: undefined behaviour that a release build answered right by
+// luck, and that AddressSanitizer caught (session 53, scripts/sanitize.sh). Here every search runs
+// through the whole tree with no bound: on a flat grid no face faces down.
+TEST(AabbTree, SearchesWithoutABoundPassOverEmptyLanes) {
+  GridOptions grid;
+  grid.divisions_x = 37, grid.divisions_y = 23;
+  const Mesh flat = make_grid(grid);
+  for (const AabbTree::Options& options : {AabbTree::Options{}, AabbTree::Options{.surface_area_splits = false}}) {
+    AabbTree tree(flat, options);
+    tree.prepare_facing();
+    for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.1, 0.2, 0.3), Eigen::Vector3d(-2, 5, -1), Eigen::Vector3d(0.5, 0.5, 0)}) {
+      const AabbTree::Hit none = tree.closest_facing(p, -Eigen::Vector3d::UnitZ());
+      EXPECT_EQ(none.face, -1);
+      EXPECT_EQ(none.squared_distance, std::numeric_limits<double>::infinity());
+      const auto [face, d] = brute_closest(flat, p);
+      const AabbTree::Hit up = tree.closest_facing(p, Eigen::Vector3d::UnitZ());
+      EXPECT_EQ(up.face, face);
+      EXPECT_EQ(up.squared_distance, d);
+      EXPECT_EQ(tree.closest(p).face, face);
+      Index hint = -1;
+      EXPECT_FALSE(tree.facing_against(p, Eigen::Vector3d::UnitZ(), hint));
+      hint = -1;
+      EXPECT_TRUE(tree.facing_against(p, -Eigen::Vector3d::UnitZ(), hint));
+    }
+  }
+}
+
 // A thin lens has two sheets a hundredth apart, facing opposite ways: near the rim and between the
 // sheets, the nearest face may lie on the far sheet, where a skip on the near sheet's cone would be
 // wrong.

@@ -162,9 +162,11 @@ void AabbTree::descend(const Eigen::Vector3d& p, const double& bound, Enter ente
       }
     }
     // Nearer first on top: pushed farthest first.
+    // (An empty lane's box lies at infinity, which a search without a bound yet, bound = infinity,
+    // would not rule out: it is passed over by its node.)
     int lanes[4], n = 0;
     for (int lane = 0; lane < 4; ++lane) {
-      if (!(d[lane] <= bound)) continue;
+      if (quad.node[lane] < 0 || !(d[lane] <= bound)) continue;
       int at = n++;
       for (; at > 0 && d[lanes[at - 1]] < d[lane]; --at) lanes[at] = lanes[at - 1];
       lanes[at] = lane;

@@ -139,7 +139,7 @@ class AabbTree {
   // bounds of those to the exact boxes (see QuadDistances), so they rule out no face the exact ones
   // would keep.
   struct alignas(64) Quad {
-    float lo[3][4], hi[3][4];  // per axis, per lane; an empty lane lies at infinity
+    float lo[3][4], hi[3][4];  // per axis, per lane; an empty lane lies at infinity (node -1)
     std::int32_t node[4];      // per lane: its node in nodes_, or -1
     std::int32_t next[4];      // per lane: its own quad, or for a leaf -1 - (first slot * 4 + count - 1)
   };
