@@ -248,7 +248,6 @@ TEST(Simplify, CreasePlanesKeepAThinBladesOutline) {
     const Comparison with = compare(blade, simplify(blade, o).mesh);
     o.crease_weight = 0;
     const Comparison without = compare(blade, simplify(blade, o).mesh);
-    std::printf("ratio %g with h %g rms %g | without h %g rms %g\n", ratio, with.hausdorff, with.rms, without.hausdorff, without.rms);
     EXPECT_LT(with.a_to_b.max, 0.75 * without.a_to_b.max);
     EXPECT_LT(with.hausdorff, 0.75 * without.hausdorff);
     EXPECT_LT(with.rms, 1.15 * without.rms);
