@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite under AddressSanitizer and UndefinedBehaviorSanitizer (g++). A read past an
 # array or an overflowing cast that a release build happens to answer right becomes a failure here.
-# Not part of CI: the instrumented build and its run take about an hour on 2 cores. Run it by hand
+# Not part of CI: on 2 cores the instrumented build takes about 25 minutes and its run 16. Run it by hand
 # after touching the hand-written kernels (the closest-point tree, the scorers, the queues, the
 # readers). See docs/fuzzing.md, "The test suite under sanitizers".
 #
@@ -16,9 +16,9 @@ command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)
 # (g++ leaves float-to-integer overflow out of "undefined": asked for by name.)
 flags="-fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=undefined,float-cast-overflow -fno-omit-frame-pointer"
 if [ ! -f build-sanitize/CMakeCache.txt ]; then
+  # (CMake links with the compile flags too, so the sanitizers' runtimes come in without linker flags.)
   cmake -S . -B build-sanitize "${generator[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLODKIT_BUILD_BENCH=OFF -DLODKIT_TEST_TIMEOUT=3600 \
-    -DCMAKE_C_FLAGS="$flags" -DCMAKE_CXX_FLAGS="$flags" \
-    -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined"
+    -DCMAKE_CXX_FLAGS="$flags"
 fi
 cmake --build build-sanitize --parallel "$(nproc)"
 
