@@ -470,9 +470,14 @@ class Refitter {
   // Each point's least-squares move: the delta that would take its samples' distances to zero.
   void solve(double sampled_max, double exponent, std::vector<Vec>& step) const {
     const std::size_t n = points_.size();
-    std::vector<Eigen::Matrix3d> normal_matrix(n, Eigen::Matrix3d::Zero());
-    std::vector<Vec> rhs(n, Vec::Zero());
-    std::vector<double> farthest(n, 0.0);
+    // Per point: its normal matrix's upper triangle (xx, xy, xz, yy, yz, zz: the matrix is symmetric),
+    // its right-hand side and its farthest sample, side by side.
+    struct Sums {
+      std::array<double, 6> upper{};
+      Vec rhs = Vec::Zero();
+      double farthest = 0;
+    };
+    std::vector<Sums> sums(n);
     // Side by side, each task summing for its own range of points over every sample, so each point's
     // sums add up in sample order whatever the number of tasks (the same bits as one task). Every task
     // reads every sample, so more than a few would read more than they save.
@@ -486,26 +491,32 @@ class Refitter {
           const auto mine = [&](int k) { return c[k] >= from && c[k] < to && !(pull.bary[k] <= 0); };
           if (!mine(0) && !mine(1) && !mine(2)) continue;
           const double weight = exponent == 0 ? 1.0 : std::pow(pull.distance / sampled_max, exponent);
-          const Eigen::Matrix3d uu = pull.direction * pull.direction.transpose();
+          const Vec& u = pull.direction;
+          const std::array<double, 6> uu{u[0] * u[0], u[0] * u[1], u[0] * u[2], u[1] * u[1], u[1] * u[2], u[2] * u[2]};
           for (int k = 0; k < 3; ++k) {
             if (!mine(k)) continue;
             const double b = pull.bary[k];
-            const Index p = c[k];
-            normal_matrix[p] += weight * b * b * uu;
-            farthest[p] = std::max(farthest[p], pull.distance);
-            rhs[p] += weight * b * pull.distance * pull.direction;
+            Sums& sum = sums[c[k]];
+            const double scale = weight * b * b;
+            for (int e = 0; e < 6; ++e) sum.upper[e] += scale * uu[e];
+            sum.farthest = std::max(sum.farthest, pull.distance);
+            sum.rhs += weight * b * pull.distance * u;
           }
         }
     });
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t p) {
       step[p].setZero();
-      const double trace = normal_matrix[p].trace();
+      const auto& [m, rhs, farthest] = sums[p];
+      const double trace = m[0] + (m[3] + m[5]);  // summed as Eigen's trace() sums
       if (fixed_[p] || !(trace > 0)) return;
       // Regularised: directions no sample constrains (along a flat surface) stay put.
-      step[p] = (normal_matrix[p] + 1e-3 * trace * Eigen::Matrix3d::Identity()).ldlt().solve(rhs[p]);
+      const double lift = 1e-3 * trace;
+      Eigen::Matrix3d a;
+      a << m[0] + lift, m[1], m[2], m[1], m[3] + lift, m[4], m[2], m[4], m[5] + lift;
+      step[p] = a.ldlt().solve(rhs);
       if (!step[p].allFinite()) step[p].setZero();  // (huge or tiny coordinates)
       // No farther than its farthest sample: a poorly constrained solve can ask for far more.
-      if (const double length = step[p].norm(); length > farthest[p]) step[p] *= farthest[p] / length;
+      if (const double length = step[p].norm(); length > farthest) step[p] *= farthest / length;
     });
   }
 
