@@ -3,6 +3,7 @@
 #include <lodkit/simplify.h>
 
 #include <chrono>
+#include <tbb/task_group.h>
 #include <cmath>
 #include <fmt/format.h>
 #include <optional>
@@ -97,17 +98,22 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
     if (turned_faces > 0) engine.emplace(turned, options);
   }
   const Mesh& reference = turned_faces > 0 ? turned : mesh;  // what the refit fits to
+  // The input's side of the refit (its tree, its samples) is made beside the collapses, which leave a core
+  // idle while one queue finishes; it serves the refit and the attribute fit both.
+  std::optional<detail::RefitInput> fitted_to;
+  const RefitOptions planned = detail::refit_options(mesh, options, detail::starting_total_turn_deg(options));
+  tbb::task_group beside;
+  if (detail::refits(planned) && !options.record_collapses && mesh.num_faces() > 0)
+    beside.run([&] { fitted_to.emplace(reference, planned.avoid_inverted); });
   SimplifyResult r = engine->run(target);
+  beside.wait();
   engine.reset();
   r.reoriented_faces = turned_faces;
   // The faces keep within the limits the collapses kept: the same turn from their input faces.
   const double total_turn = r.turn_limit_relaxed_at ? detail::kRelaxedTotalTurnDeg : detail::starting_total_turn_deg(options);
-  // The input's tree serves the refit and the attribute fit both.
-  std::optional<detail::RefitInput> fitted_to;
   if (const RefitOptions refit = detail::refit_options(mesh, options, total_turn);
-      detail::refits(refit) && !options.record_collapses && r.collapses > 0 &&
-      detail::needs_refit(reference, r.mesh, refit, r.face_origin))
-    r.refit = detail::refit_to_input(fitted_to.emplace(reference, refit.avoid_inverted), r.mesh, refit, r.face_origin);
+      fitted_to && r.collapses > 0 && detail::needs_refit(reference, r.mesh, refit, r.face_origin))
+    r.refit = detail::refit_to_input(*fitted_to, r.mesh, refit, r.face_origin);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   if (r.collapses > 0) r.attribute_fit = detail::fit_simplified_attributes(reference, fitted_to ? &fitted_to->tree : nullptr, r.mesh, options);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
