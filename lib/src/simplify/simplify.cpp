@@ -3,10 +3,10 @@
 #include <lodkit/simplify.h>
 
 #include <chrono>
-#include <tbb/task_group.h>
 #include <cmath>
 #include <fmt/format.h>
 #include <optional>
+#include <tbb/task_group.h>
 #include <utility>
 
 #include "core/geometry.h"
@@ -103,7 +103,7 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   std::optional<detail::RefitInput> fitted_to;
   const RefitOptions planned = detail::refit_options(mesh, options, detail::starting_total_turn_deg(options));
   tbb::task_group beside;
-  if (detail::refits(planned) && !options.record_collapses && mesh.num_faces() > 0)
+  if (detail::refits(planned) && !options.record_collapses && target < mesh.num_faces())
     beside.run([&] { fitted_to.emplace(reference, planned.avoid_inverted); });
   SimplifyResult r = engine->run(target);
   beside.wait();
