@@ -88,7 +88,7 @@ struct RefitOptions {
   /// the largest sampled distance: the first stage's largest distances stay. 0 = none.
   int rms_passes = 8;
   double rms_guard = 0.9;  ///< in [0, 1]; 1 lets samples up to the largest distance (RMS lower, Hausdorff up a little)
-  /// After a stage's first pass, a sample nearer than this fraction of the largest sampled distance
+  /// After the refit's first measure, a sample nearer than this fraction of the largest sampled distance
   /// whose nearest point on the face it was last measured against lies inside that face keeps that face
   /// without a search (the distance is then an upper bound; the largest stays exact). 0: every sample
   /// is searched every pass. 0.5 takes 0.6 times as long as 0 over the shared meshes, with the same

@@ -7,7 +7,7 @@
 // iteratively reweighted least squares over points sampled on both surfaces.
 //
 // Each pass measures every sample: the input's points and edge midpoints against the output, and a
-// barycentric grid on each output face against the input. (After a stage's first pass, most samples
+// barycentric grid on each output face against the input. (After the first measure, most samples
 // are measured against the face they were nearest before, without a search: see sample().) A sample
 // at distance d that lies at barycentric b on an output face (or whose nearest output point does)
 // comes nearer by b_k (u . delta) when that face's corner k moves by delta, to first order, u the unit
