@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 namespace lodkit::detail {
 
@@ -97,15 +98,26 @@ inline Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const
   return a + ab * v + ac * w;
 }
 
+/// The weights (v, w) of corners b and c at p's foot on the plane of triangle a b c, unclamped (negative
+/// beyond an edge; the foot is a + v (b - a) + w (c - a)). Nothing for a triangle whose angle at a has
+/// a squared sine of `min_sine2` or less (0: only a degenerate one), where the plane is uncertain.
+inline std::optional<Eigen::Vector2d> plane_weights(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                                    const Eigen::Vector3d& c, const Eigen::Vector3d& p,
+                                                    double min_sine2 = 0) {
+  const Eigen::Vector3d e0 = b - a, e1 = c - a, ep = p - a;
+  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), dp0 = ep.dot(e0), dp1 = ep.dot(e1);
+  const double det = d00 * d11 - d01 * d01;
+  if (!(det > min_sine2 * d00 * d11)) return std::nullopt;
+  return Eigen::Vector2d((d11 * dp0 - d01 * dp1) / det, (d00 * dp1 - d01 * dp0) / det);
+}
+
 /// Barycentric coordinates of p (on or near triangle a b c), clamped to the triangle; the centroid's
 /// for a degenerate triangle.
 inline Eigen::Vector3d barycentric(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                                    const Eigen::Vector3d& p) {
-  const Eigen::Vector3d e0 = b - a, e1 = c - a, ep = p - a;
-  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), dp0 = ep.dot(e0), dp1 = ep.dot(e1);
-  const double det = d00 * d11 - d01 * d01;
-  if (!(det > 0)) return Eigen::Vector3d::Constant(1.0 / 3);
-  const double v = (d11 * dp0 - d01 * dp1) / det, w = (d00 * dp1 - d01 * dp0) / det;
+  const auto vw = plane_weights(a, b, c, p);
+  if (!vw) return Eigen::Vector3d::Constant(1.0 / 3);
+  const double v = vw->x(), w = vw->y();
   const Eigen::Vector3d bary = Eigen::Vector3d(1 - v - w, v, w).cwiseMax(0.0);
   return bary / bary.sum();
 }

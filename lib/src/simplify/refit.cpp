@@ -60,13 +60,11 @@ struct Foot {
   Vec point, bary;
 };
 std::optional<Foot> foot_inside(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
-  const Vec e0 = b - a, e1 = c - a, ep = p - a;
-  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), dp0 = ep.dot(e0), dp1 = ep.dot(e1);
-  const double det = d00 * d11 - d01 * d01;
-  if (!(det > 1e-10 * d00 * d11)) return std::nullopt;
-  const double v = (d11 * dp0 - d01 * dp1) / det, w = (d00 * dp1 - d01 * dp0) / det;
+  const auto vw = detail::plane_weights(a, b, c, p, 1e-10);
+  if (!vw) return std::nullopt;
+  const double v = vw->x(), w = vw->y();
   if (!(v >= 0 && w >= 0 && v + w <= 1)) return std::nullopt;
-  return Foot{a + v * e0 + w * e1, Vec(1 - v - w, v, w)};
+  return Foot{a + v * (b - a) + w * (c - a), Vec(1 - v - w, v, w)};
 }
 
 // p's nearest point on `tree`'s mesh (and, with `bary`, its barycentric weights on that face); or,
@@ -75,10 +73,6 @@ std::optional<Foot> foot_inside(const Vec& p, const Vec& a, const Vec& b, const 
 template <typename Corners>
 detail::AabbTree::Hit nearest(const detail::AabbTree& tree, const Vec& p, Index last, double below2, Corners corners,
                               bool& kept, Vec* bary = nullptr) {
-  const auto weights = [&](const detail::AabbTree::Hit& hit) {
-    if (bary) *bary = detail::barycentric(corners(hit.face, 0), corners(hit.face, 1), corners(hit.face, 2), hit.point);
-    return hit;
-  };
   kept = false;
   if (last >= 0 && below2 > 0)
     if (const auto foot = foot_inside(p, corners(last, 0), corners(last, 1), corners(last, 2))) {
@@ -88,7 +82,9 @@ detail::AabbTree::Hit nearest(const detail::AabbTree& tree, const Vec& p, Index 
         return {foot->point, d2, last};
       }
     }
-  return weights(tree.closest(p, last));
+  const auto hit = tree.closest(p, last);
+  if (bary) *bary = detail::barycentric(corners(hit.face, 0), corners(hit.face, 1), corners(hit.face, 2), hit.point);
+  return hit;
 }
 
 std::uint64_t edge_key(Index a, Index b) {
