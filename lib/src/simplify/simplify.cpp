@@ -101,18 +101,17 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   // The input's side of the refit (its tree, its samples) is made beside the collapses, which leave a core
   // idle while one queue finishes; it serves the refit and the attribute fit both.
   std::optional<detail::RefitInput> fitted_to;
-  const RefitOptions planned = detail::refit_options(mesh, options, detail::starting_total_turn_deg(options));
+  RefitOptions refit = detail::refit_options(mesh, options, detail::starting_total_turn_deg(options));
   tbb::task_group beside;
-  if (detail::refits(planned) && !options.record_collapses && target < mesh.num_faces())
-    beside.run([&] { fitted_to.emplace(reference, planned.avoid_inverted); });
+  if (detail::refits(refit) && !options.record_collapses && target < mesh.num_faces())
+    beside.run([&] { fitted_to.emplace(reference, refit.avoid_inverted); });
   SimplifyResult r = engine->run(target);
   beside.wait();
   engine.reset();
   r.reoriented_faces = turned_faces;
   // The faces keep within the limits the collapses kept: the same turn from their input faces.
-  const double total_turn = r.turn_limit_relaxed_at ? detail::kRelaxedTotalTurnDeg : detail::starting_total_turn_deg(options);
-  if (const RefitOptions refit = detail::refit_options(mesh, options, total_turn);
-      fitted_to && r.collapses > 0 && detail::needs_refit(reference, r.mesh, refit, r.face_origin))
+  if (r.turn_limit_relaxed_at) refit.max_total_turn_deg = detail::kRelaxedTotalTurnDeg;
+  if (fitted_to && r.collapses > 0 && detail::needs_refit(reference, r.mesh, refit, r.face_origin))
     r.refit = detail::refit_to_input(*fitted_to, r.mesh, refit, r.face_origin);
   if (options.recompute_normals) r.mesh.attributes.normals = compute_vertex_normals(r.mesh);
   if (r.collapses > 0) r.attribute_fit = detail::fit_simplified_attributes(reference, fitted_to ? &fitted_to->tree : nullptr, r.mesh, options);
