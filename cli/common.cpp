@@ -187,7 +187,8 @@ CLI::Option* add_inverted_faces_option(CLI::App* app, std::optional<std::string>
                    "Collapses that leave a face facing against the nearest input face: allow (no check), avoid (such a "
                    "collapse waits until the others cost four times as much), refuse (never; may stop short of the "
                    "target, and says so). Default: avoid for quadric, refuse for schroeder (whose avoid lets such a removal be once "
-                   "a pass's threshold is twice its error), allow for hoppe and edge-length")
+                   "a pass's threshold is twice its error), allow for hoppe and edge-length. simplify's refit "
+                   "after the collapses makes no such face unless allow is given")
       ->check(CLI::IsMember({"allow", "avoid", "refuse"}));
 }
 

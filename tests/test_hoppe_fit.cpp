@@ -19,6 +19,7 @@ namespace {
 SimplifyResult hoppe(const Mesh& mesh, double ratio, int fit_passes) {
   SimplifyOptions o{.method = SimplifyMethod::Hoppe, .target_ratio = ratio};
   o.hoppe_fit_passes = fit_passes;
+  o.refit_passes = 0;  // hoppe's fit alone: the refit that follows by default would move the vertices again
   return simplify(mesh, o);
 }
 

@@ -115,7 +115,7 @@ TEST(Refit, NoSampleKeepsAFaceWithoutArea) {
   EXPECT_LT(compare(clean, kept).hausdorff, 1.02 * compare(clean, searched).hausdorff);
 }
 
-TEST(Refit, SimplifyRunsItByDefaultForQuadricAndReportsIt) {
+TEST(Refit, SimplifyRunsItByDefaultForQuadricAndHoppeAndReportsIt) {
   const Mesh fine = test::bumpy_sphere(5, 0.03);
   SimplifyOptions o;
   o.target_ratio = 0.02;
@@ -128,9 +128,24 @@ TEST(Refit, SimplifyRunsItByDefaultForQuadricAndReportsIt) {
   EXPECT_FALSE(without.refit);
   EXPECT_EQ(r.mesh.triangles, without.mesh.triangles);
   EXPECT_LT(compare(fine, r.mesh).hausdorff_bound, compare(fine, without.mesh).hausdorff);
-  // Off by default where it is not wanted: hoppe, edge-length, large inputs, recorded collapses.
-  EXPECT_EQ(default_refit_passes(SimplifyMethod::Hoppe, 1000), 0);
+  // hoppe too: the same faces, nearer the input, and fewer facing against it (its collapses allow them; the
+  // refit does not add any and turns most of theirs).
+  o.method = SimplifyMethod::Hoppe;
+  const SimplifyResult hoppe = simplify(fine, o);
+  ASSERT_TRUE(hoppe.refit);
+  o.refit_passes = 0;
+  const SimplifyResult hoppe_unrefit = simplify(fine, o);
+  o.refit_passes.reset();
+  EXPECT_FALSE(hoppe_unrefit.refit);
+  EXPECT_EQ(hoppe.mesh.triangles, hoppe_unrefit.mesh.triangles);
+  EXPECT_LT(compare(fine, hoppe.mesh).hausdorff_bound, compare(fine, hoppe_unrefit.mesh).hausdorff);
+  EXPECT_LT(compare(fine, hoppe.mesh).rms, compare(fine, hoppe_unrefit.mesh).rms);
+  EXPECT_LT(count_flipped_faces(fine, hoppe.mesh), count_flipped_faces(fine, hoppe_unrefit.mesh));  // 2 against 11
+  o.method = SimplifyMethod::Quadric;
+  // Off by default where it is not wanted: edge-length, large inputs, recorded collapses.
+  EXPECT_EQ(default_refit_passes(SimplifyMethod::Hoppe, 1000), 10);
   EXPECT_EQ(default_refit_passes(SimplifyMethod::EdgeLength, 1000), 0);
+  EXPECT_EQ(default_refit_passes(SimplifyMethod::Hoppe, 1'000'000), 0);
   EXPECT_EQ(default_refit_passes(SimplifyMethod::Quadric, 1'000'000), 0);
   o.record_collapses = true;
   EXPECT_FALSE(simplify(fine, o).refit);

@@ -449,12 +449,13 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
       ->check(kNonNegative);
   sub->add_option("--refit-passes", opt->refit_passes,
                   "After the collapses, fit every vertex to the input at once, towards the largest distances, in this "
-                  "many sampling passes (0 = no refit; default 10 for quadric on inputs up to 500,000 faces, else 0)")
+                  "many sampling passes (0 = no refit; default 10 for quadric and hoppe on inputs up to 500,000 faces, "
+                  "else 0)")
       ->check(CLI::Range(0, 1000));
   sub->add_option("--refit-rms-passes", opt->refit_rms_passes,
                   "Then fit the squared distances (the RMS) in this many passes, no sample getting farther than "
-                  "the larger of its own distance and 0.9 times the largest (default 8 after --refit-passes N > 0, "
-                  "else 0; given alone, this stage runs alone)")
+                  "the larger of its own distance and 0.9 times the largest (default 8 after a first stage, else 0; "
+                  "given where the first stage is off, e.g. with --refit-passes 0, this stage runs alone)")
       ->check(CLI::Range(0, 1000));
   sub->add_flag("--recompute-normals", opt->recompute_normals,
                 "Ignore the input's normals (flat shading makes every edge a seam) and write area-weighted ones");
@@ -509,7 +510,7 @@ Examples:
   lodkit simplify scan_1M.ply -o scan_lo.ply --ratio 0.1 --inverted-faces allow   # faster; faces may face against the input
   lodkit simplify scan.ply -o scan_fast.ply --ratio 0.1 --refit-passes 0   # 2-4x faster; errors as the collapses left them
   lodkit simplify scan.ply -o scan_h.ply --ratio 0.1 --refit-rms-passes 0  # the refit for the largest distances only
-  lodkit simplify bunny.ply -o bunny_h.ply --ratio 0.1 --method hoppe --refit-rms-passes 8   # hoppe, RMS fitted after
+  lodkit simplify bunny.ply -o bunny_h.ply --ratio 0.1 --method hoppe --refit-passes 0   # hoppe's own positions, 1.2-1.4x faster
   lodkit simplify bunny.ply -o broken.ply --method edge-length --ratio 0.01 --allow-topology-change)");
   return {sub, [opt, &global] { return run_simplify(*opt, global); }};
 }

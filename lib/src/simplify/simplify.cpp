@@ -122,7 +122,10 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
 namespace detail {
 
 RefitOptions refit_options(const Mesh& mesh, const SimplifyOptions& options, double total_turn_deg) {
-  const InvertedFaces inverted = options.inverted_faces.value_or(default_inverted_faces(options.method));
+  // The refit makes no face face against the input unless that was asked for: hoppe's collapses allow
+  // such faces by default (they cost its energy little), but a refit that moves every vertex at once
+  // would otherwise add some.
+  const InvertedFaces inverted = options.inverted_faces.value_or(InvertedFaces::Avoid);
   const int passes = options.preserve_topology ? options.refit_passes.value_or(default_refit_passes(options.method, mesh.num_faces())) : 0;
   // The second stage follows the first by default; asked for alone, it runs alone.
   const int rms_passes = options.preserve_topology ? options.refit_rms_passes.value_or(passes > 0 ? kDefaultRefitRmsPasses : 0) : 0;
@@ -147,7 +150,7 @@ int attribute_values_per_vertex(const Mesh& mesh) {
 Index default_lane_faces(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 8000 : 125000; }
 
 int default_refit_passes(SimplifyMethod method, Index input_faces) {
-  return method == SimplifyMethod::Quadric && input_faces <= 500'000 ? 10 : 0;
+  return method != SimplifyMethod::EdgeLength && input_faces <= 500'000 ? 10 : 0;
 }
 
 Index default_max_valence(SimplifyMethod method) { return method == SimplifyMethod::Hoppe ? 24 : 0; }
