@@ -164,6 +164,7 @@ struct SimplifyOptions {
   /// Faces facing against the input face nearest their centroid: checked with a closest-face query per
   /// face a collapse changes, skipped where a certificate shows the answer (AabbTree::facing_against()).
   /// Unset: by method (default_inverted_faces()). With preserve_topology only; schroeder does not use it.
+  /// The refit after the collapses avoids such faces unless this is Allow (unset counts as Avoid there).
   std::optional<InvertedFaces> inverted_faces{};
   /// Attribute-aware quadrics (Garland & Heckbert 1998) for the attributes given a weight; the merged
   /// wedges then also take the attribute values that minimise the error.
@@ -230,7 +231,8 @@ struct SimplifyOptions {
   /// Passes of the refit's second stage, towards the least squared distances with the largest kept
   /// (RefitOptions::rms_passes; on the shared scans, CAD parts and attribute meshes at 10 % and 1 %:
   /// RMS x0.88, Hausdorff x1.00). Unset: kDefaultRefitRmsPasses where the first stage runs
-  /// (refit_passes > 0, given or by default), else none; given alone, the second stage runs alone.
+  /// (refit_passes > 0, given or by default), else none; given where the first stage is off
+  /// (refit_passes = 0, or by default above 500,000 faces), the second stage runs alone.
   std::optional<int> refit_rms_passes{};
   /// Set the output's vertex normals, colours and UVs, where input and output have them, to the values that
   /// best match the input's, once the positions are final (fit_attributes_to_input(); positions and faces
