@@ -127,7 +127,7 @@ RefitOptions refit_options(const Mesh& mesh, const SimplifyOptions& options, dou
   // would otherwise add some.
   const InvertedFaces inverted = options.inverted_faces.value_or(InvertedFaces::Avoid);
   const int passes = options.preserve_topology ? options.refit_passes.value_or(default_refit_passes(options.method, mesh.num_faces())) : 0;
-  // The second stage follows the first by default; asked for alone, it runs alone.
+  // The second stage follows the first by default; given where the first is off, it runs alone.
   const int rms_passes = options.preserve_topology ? options.refit_rms_passes.value_or(passes > 0 ? kDefaultRefitRmsPasses : 0) : 0;
   // hoppe's energy fits the squared distances already, and a refit weighted less steeply keeps its RMS
   // (bunny -> 1 %: RMS 0.127 % -> 0.111 % with exponent 2, 0.122 % with 6; docs/benchmarks-log.md).
