@@ -1,6 +1,6 @@
 #pragma once
-// Hoppe's points sampled on the input, shared by his energy (hoppe_cost.cpp) and the fit after the
-// collapses (hoppe_fit.cpp) (not public API).
+// Hoppe's points sampled on the input, shared by his energy (hoppe_cost.cpp keeps them, hoppe_scorer.cpp
+// scores a collapse against them) and the fit after the collapses (hoppe_fit.cpp) (not public API).
 #include <algorithm>
 #include <cstdint>
 #include <mutex>
