@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <lodkit/error.h>
 #include <lodkit/io.h>
+#include <lodkit/pm_io.h>
 #include <lodkit/primitives.h>
 
 #include <fmt/format.h>
@@ -43,6 +44,27 @@ TEST(BadInput, MissingFileAndDirectory) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos);
   }
+  // Without an extension the file's own trouble comes first, not the format it cannot be told by.
+  auto message = [](const std::filesystem::path& path) {
+    try {
+      read_mesh(path);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  std::filesystem::create_directory(dir / "scans");
+  EXPECT_NE(message(dir / "scans").find("is a directory"), std::string::npos) << message(dir / "scans");
+  EXPECT_NE(message(dir / "nope").find("cannot open"), std::string::npos) << message(dir / "nope");
+  // The same for a directory named as the output, and for a .pm stream.
+  try {
+    write_mesh(make_box({.divisions = 1}), dir / "scans");
+    ADD_FAILURE() << "wrote over a directory";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(std::filesystem::is_directory(dir / "scans"));
+  EXPECT_THROW(read_pm(dir / "scans"), Error);
 }
 
 TEST(BadInput, EveryTruncationOfAGoodFileIsHandled) {

@@ -72,8 +72,9 @@ Mesh read_mesh_from_memory(std::string_view bytes, MeshFormat format, const std:
 }
 
 Mesh read_mesh(const std::filesystem::path& path, const ReadOptions& options) {
-  const MeshFormat format = require_format(path, options.format);
+  // The file first: a missing file or a directory says so, whatever its name's extension.
   const detail::FileBuffer file(path);
+  const MeshFormat format = require_format(path, options.format);
   return read_mesh_from_memory(file.bytes(), format, path.string(), options);
 }
 
@@ -93,6 +94,7 @@ void write_format(const Mesh& mesh, MeshFormat format, detail::Output& out,
 }  // namespace
 
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options) {
+  detail::refuse_directory(path);
   const MeshFormat format = require_format(path, options.format);
   validate(mesh, path.string());
   detail::write_file_atomically(path, [&](detail::Output& out) {

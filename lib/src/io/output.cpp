@@ -79,11 +79,16 @@ bool Output::flush() {
   return !failed_;
 }
 
+void refuse_directory(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw Error(fmt::format("{}: is a directory", path.string()));
+}
+
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(Output&)>& write) {
   namespace fs = std::filesystem;
   const std::string name = path.string();
-  if (fs::is_directory(path)) throw Error(fmt::format("{}: is a directory", name));
+  refuse_directory(path);
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
   std::string hidden_name(".");  // appended piecewise: GCC 12 warns falsely on "." + string
   hidden_name += path.filename().string();

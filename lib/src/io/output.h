@@ -53,6 +53,10 @@ class Output {
   bool failed_ = false;
 };
 
+/// \throw Error "<path>: is a directory" where `path` names one. Checked before anything else about a
+/// file named to be written or read (its format, its temporary file), so that this is what the user hears.
+void refuse_directory(const std::filesystem::path& path);
+
 /// Runs `write` against a temporary file in the target's directory, then renames it over `path`.
 /// On any failure (an exception from `write` or an I/O error) the temporary file is removed and the
 /// target is left untouched. \throw Error "<path>: <reason>".

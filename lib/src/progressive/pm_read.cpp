@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "adapters/draco_adapter.h"
+#include "io/output.h"
 #include "progressive/pm_stream.h"
 
 namespace lodkit {
@@ -694,8 +695,7 @@ PmReadResult read_pm_from_memory(std::string_view bytes, const std::string& name
 }
 
 PmReadResult read_pm(const std::filesystem::path& path, const PmReadOptions& options) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw Error(fmt::format("{}: is a directory", path.string()));
+  detail::refuse_directory(path);
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
   detail::pm::Source src(file.get());
