@@ -845,6 +845,14 @@ TEST(CliCsg, BooleansAndTreesEndToEnd) {
   EXPECT_NE(opentree.err.find("lodkit: error: open.json: $.children[1]: open.ply: is not closed"), std::string::npos)
       << opentree.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "never.ply"));
+  // A missing tree and a directory fail as a missing or directory mesh does: exit 1, naming the file.
+  std::filesystem::create_directory(dir / "trees");
+  for (const char* name : {"missing.json", "trees"}) {
+    const CliRun r = run(dir, fmt::format("csg tree {} -o never.ply", name));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find(fmt::format("lodkit: error: {}: ", name)), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "never.ply"));
 }
 
 }  // namespace

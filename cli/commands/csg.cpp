@@ -64,7 +64,7 @@ Command add_csg_command(CLI::App& app, const GlobalOptions& global) {
     ops.push_back({o, op});
   }
   CLI::App* tree = sub->add_subcommand("tree", "Evaluate a CSG tree (JSON) of primitives, meshes and transforms");
-  tree->add_option("model", opt->tree, "The tree, e.g. data/csg/housing.json")->required()->check(CLI::ExistingFile);
+  tree->add_option("model", opt->tree, "The tree, e.g. data/csg/housing.json")->required();
   tree->add_option("-o,--output", opt->output, "Output mesh, or - for stdout (with --format)")->required();
   tree->add_option("--format", opt->format, "Format of stdout")->check(format_validator());
   tree->add_option("--tolerance", opt->tolerance, "Chordal tolerance of curved primitives")->check(kPositive)

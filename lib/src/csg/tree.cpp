@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <fmt/format.h>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -20,6 +22,8 @@
 #include <tuple>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+
+#include "io/output.h"
 
 namespace lodkit {
 namespace {
@@ -356,8 +360,9 @@ CsgNode parse_csg(const std::string& json_text, const std::string& name, const s
 }
 
 CsgNode read_csg(const std::filesystem::path& path) {
+  detail::refuse_directory(path);  // (an ifstream opens a directory and then reads nothing)
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(fmt::format("{}: cannot open", path.string()));
+  if (!in) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
   std::stringstream s;
   s << in.rdbuf();
   return parse_csg(s.str(), path.string(), path.parent_path());
