@@ -533,30 +533,29 @@ DecimateResult decimate(const Mesh& mesh, const DecimateOptions& options) {
     r.error = std::max(r.error, bound);
     if (inverted && !r.inverted_allowed_at) r.inverted_allowed_at = d.alive_faces() + (s.closed ? 2 : 1);
   };
+  // v's removal error and the bound it is held to (with --accumulate-error, plus what its neighbours'
+  // removals passed on), with its star in s; none where v is gone or cannot be removed.
+  const auto removal = [&](Index v) -> std::optional<std::pair<double, double>> {
+    if (d.removed(v)) return std::nullopt;
+    d.star(v, s);
+    const double e = d.removal_error(v, s);
+    if (e < 0) return std::nullopt;
+    return std::pair{e, e + (options.accumulate_error ? d.accumulated(v) : 0.0)};
+  };
   for (double t : thresholds) {
     for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v) {
-      if (d.removed(v)) continue;
-      d.star(v, s);
-      const double e = d.removal_error(v, s);
-      if (e < 0) continue;
-      const double bound = e + (options.accumulate_error ? d.accumulated(v) : 0.0);
-      if (bound > t) continue;
+      const auto found = removal(v);
+      if (!found || found->second > t) continue;
       const Index removes = s.closed ? 2 : 1;
       if (d.alive_faces() - removes < target && removes > 1) continue;  // would overshoot by one
-      apply(v, e, bound, t);
+      apply(v, found->first, found->second, t);
     }
     if (d.alive_faces() <= target) break;
   }
   if (has_target && d.alive_faces() == target + 1) {
     // Only two-face removals are left (a closed mesh has an even face count): land one below.
-    for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v) {
-      if (d.removed(v)) continue;
-      d.star(v, s);
-      const double e = d.removal_error(v, s);
-      if (e < 0) continue;
-      const double bound = e + (options.accumulate_error ? d.accumulated(v) : 0.0);
-      if (bound <= max_error) apply(v, e, bound, max_error);
-    }
+    for (Index v = 0; v < d.points() && d.alive_faces() > target; ++v)
+      if (const auto found = removal(v); found && found->second <= max_error) apply(v, found->first, found->second, max_error);
   }
 
   std::vector<Index> vertex_of;
