@@ -265,7 +265,13 @@ void HoppeScorer::gather(const EngineState& s, const Probe& probe, Index u, Inde
   for (Index p : {u, v})
     for (Index f : s.faces_of(p)) __builtin_prefetch(&face_samples_[f]), __builtin_prefetch(&s.face_point[f]);
   for (Index p : {u, v})
-    for (Index f : s.faces_of(p)) __builtin_prefetch(face_samples_[f].data());
+    for (Index f : s.faces_of(p)) {
+      // Every line of the points that take part (at most kPointsPerFace of them, strided), not just the first.
+      const auto& fp = face_samples_[f];
+      const char* at = reinterpret_cast<const char*>(fp.data());
+      const std::size_t stride = std::max<std::size_t>((fp.size() + kPointsPerFace - 1) / kPointsPerFace, 1);
+      for (std::size_t i = 0; i < fp.size(); i += stride) __builtin_prefetch(at + i * sizeof(Sample));
+    }
   for (Index p : {u, v})
     for (Index f : s.faces_of(p)) {
       bool has_u = false, has_v = false;
