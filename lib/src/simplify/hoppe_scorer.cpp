@@ -269,7 +269,7 @@ void HoppeScorer::gather(const EngineState& s, const Probe& probe, Index u, Inde
       // Every line of the points that take part (at most kPointsPerFace of them, strided), not just the first.
       const auto& fp = face_samples_[f];
       const char* at = reinterpret_cast<const char*>(fp.data());
-      const std::size_t stride = std::max<std::size_t>((fp.size() + kPointsPerFace - 1) / kPointsPerFace, 1);
+      const std::size_t stride = stride_of(fp.size());
       for (std::size_t i = 0; i < fp.size(); i += stride) __builtin_prefetch(at + i * sizeof(Sample));
     }
   for (Index p : {u, v})
@@ -282,12 +282,12 @@ void HoppeScorer::gather(const EngineState& s, const Probe& probe, Index u, Inde
       // estimate of Delta E stays unbiased while coarse levels (100+ points per face) stay cheap.
       const auto& fp = face_samples_[f];
       point_count_ += fp.size();
-      const std::size_t stride = (fp.size() + kPointsPerFace - 1) / kPointsPerFace;
+      const std::size_t stride = stride_of(fp.size());
       const int home = has_u && has_v ? -1 : static_cast<int>(star_.size());  // its triangle in the new star
-      for (std::size_t i = 0; i < fp.size(); i += std::max<std::size_t>(stride, 1)) {
+      for (std::size_t i = 0; i < fp.size(); i += stride) {
         points_.push_back(fp[i].x);
         dist2_.push_back(fp[i].dist2);
-        weight_.push_back(double(stride ? stride : 1));
+        weight_.push_back(double(stride));
         home_.push_back(home);
         if (dims > 0) {
           const double* x = &face_values_[f][(dims + 2) * i];

@@ -23,6 +23,7 @@
 //
 // This file scores one candidate collapse by that energy; hoppe_cost.cpp keeps the points on their faces
 // as the collapses go (not public API).
+#include <algorithm>
 #include <array>
 #include <utility>
 #include <vector>
@@ -136,6 +137,9 @@ class HoppeScorer {
   // Scratch for one candidate.
   std::vector<Index> curve_points_, curve_ends_, scratch_;
   static constexpr std::size_t kPointsPerFace = 16;
+  /// Of a face's n points, every stride-th takes part in a score (at most kPointsPerFace), each standing
+  /// for `stride` points.
+  static std::size_t stride_of(std::size_t n) { return std::max<std::size_t>((n + kPointsPerFace - 1) / kPointsPerFace, 1); }
   std::vector<Eigen::Vector3d> points_;  ///< the points of the neighbourhood, side by side
   std::vector<double> dist2_;            ///< per point of points_: its squared distance before
   std::vector<Index> ring_u_, ring_v_, ring_;
