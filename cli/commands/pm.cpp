@@ -1,41 +1,55 @@
-// lodkit pm build|info|extract|geomorph: progressive meshes and the .pm stream (extract --eye and
-// --eye-path: pm_selective.cpp).
+// lodkit pm build|info|extract|geomorph: progressive meshes and the .pm stream.
 #include <lodkit/error.h>
 #include <lodkit/pm_io.h>
 #include <lodkit/progressive.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
+#include <fstream>
+#include <limits>
 #include <memory>
+#include <sstream>
 
-#include "commands/pm_command.h"
 #include "common.h"
 
-namespace lodkit::cli::pm {
+namespace lodkit::cli {
+namespace {
 
 namespace fs = std::filesystem;
 
-PmReadResult read_pm_input(const std::string& path, const PmReadOptions& options) {
+struct PmCliOptions {
+  // build
+  std::string input, output, method = "quadric";
+  std::optional<std::string> format;
+  std::optional<Index> base_faces;
+  int quantize = 0;
+  bool draco = false, keep_order = false, json = false, measure = false, drop_normals = false, keep_orientation = false;
+  Index block = 1024;
+  std::vector<double> attribute_weights;
+  std::optional<std::string> inverted_faces;  // allow|avoid|refuse; unset: by method, as simplify
+  // extract / geomorph
+  std::optional<Index> faces, from, to;
+  std::optional<double> ratio, pixel_error, alpha, max_error;
+  double distance = 10.0, fov = 60.0, viewport = 1080.0;
+  int frames = 0;
+  bool input_order = false, certified = false, fit_attributes = false;
+  std::optional<std::string> prove_with;  // extract: the mesh the stream was built from
+  std::vector<double> eye, look_at;        // extract: selective refinement for this viewer
+  std::optional<std::string> eye_path;     // extract: ... for each viewer of this file
+  int morph_frames = 1;                    // extract --eye-path: frames per step, the last the view itself
+  double aspect = 16.0 / 9.0;
+  bool no_cull = false, cull_backfaces = false, allow_folds = false;
+  std::optional<Index> rows;
+};
+
+// A stream from a file, or from stdin when `path` is "-".
+PmReadResult read_pm_input(const std::string& path, const PmReadOptions& options = {}) {
   return path == "-" ? read_pm_from_memory(read_stdin(), "<stdin>", options) : read_pm(path, options);
 }
-
-void warn(const PmReadResult& r, const GlobalOptions& global) {
-  if (!r.warning.empty() && !global.quiet) fmt::print(stderr, "warning: {}\n", r.warning);
-}
-
-LevelErrorKind selection_kind(const PmCliOptions& o) {
-  return o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;
-}
-
-std::string numbered(const std::string& output, std::size_t i) {
-  const fs::path out(output);
-  return (out.parent_path() / fmt::format("{}_{:03d}{}", out.stem().string(), i, out.extension().string())).string();
-}
-
-namespace {
 
 int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   refuse_json_beside_stdout(o.json, o.output);
@@ -105,6 +119,10 @@ int run_build(const PmCliOptions& o, const GlobalOptions& global) {
   return 0;
 }
 
+void warn(const PmReadResult& r, const GlobalOptions& global) {
+  if (!r.warning.empty() && !global.quiet) fmt::print(stderr, "warning: {}\n", r.warning);
+}
+
 int run_info(const PmCliOptions& o, const GlobalOptions& global) {
   const PmReadResult r = read_pm_input(o.input);
   warn(r, global);
@@ -171,6 +189,11 @@ int run_info(const PmCliOptions& o, const GlobalOptions& global) {
   return 0;
 }
 
+/// By the measured distance (the bound where the stream has none), unless the bound is asked for.
+LevelErrorKind selection_kind(const PmCliOptions& o) {
+  return o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;
+}
+
 /// The viewer of --pixel-error, --distance, --fov and --viewport (with --pixel-error given).
 ScreenSpaceBudget view_of(const PmCliOptions& o) { return {*o.pixel_error, o.distance, o.fov, o.viewport}; }
 
@@ -199,6 +222,193 @@ Index choose_level(const PmCliOptions& o, const PmReadResult& r, std::string& wh
                     o.distance, o.fov, o.viewport, what,
                     projected_pixels(level_error(pm, level, kind), bounding_radius(pm), view));
   return level;
+}
+
+// --eye and --look-at: CLI11 takes exactly three numbers.
+Eigen::Vector3d point_option(const std::vector<double>& xyz) { return {xyz[0], xyz[1], xyz[2]}; }
+
+// out.ply -> out_000.ply, out_001.ply, ...: the frames of a geomorph or the views of a path.
+std::string numbered(const std::string& output, std::size_t i) {
+  const fs::path out(output);
+  return (out.parent_path() / fmt::format("{}_{:03d}{}", out.stem().string(), i, out.extension().string())).string();
+}
+
+// One viewer of --eye-path (or --eye): where from, where to (unset: --look-at, or the model's centre),
+// and the line it came from.
+struct PathView {
+  Eigen::Vector3d eye;
+  std::optional<Eigen::Vector3d> look_at;
+  int line = 0;
+};
+
+// An --eye-path file: a viewer per line, "x,y,z" or "x,y,z,lx,ly,lz" (the point looked at); blank lines
+// and lines starting with # are skipped; commas or spaces between numbers.
+std::vector<PathView> read_eye_path(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(fmt::format("{}: cannot open", path));
+  std::vector<PathView> views;
+  std::string text;
+  for (int line = 1; std::getline(in, text); ++line) {
+    std::replace(text.begin(), text.end(), ',', ' ');
+    std::istringstream fields(text);
+    std::vector<double> numbers;
+    std::string field;
+    while (fields >> field) {
+      if (numbers.empty() && field.starts_with('#')) break;
+      double x = 0;
+      const auto [end, error] = std::from_chars(field.data(), field.data() + field.size(), x);
+      if (error != std::errc() || end != field.data() + field.size() || !std::isfinite(x))
+        throw Error(fmt::format("{}:{}: '{}' is not a finite number", path, line, field));
+      numbers.push_back(x);
+    }
+    if (numbers.empty()) continue;
+    if (numbers.size() != 3 && numbers.size() != 6)
+      throw Error(fmt::format("{}:{}: expected 3 numbers (the eye) or 6 (and the point looked at), got {}", path, line, numbers.size()));
+    PathView v{{numbers[0], numbers[1], numbers[2]}, std::nullopt, line};
+    if (numbers.size() == 6) v.look_at = Eigen::Vector3d(numbers[3], numbers[4], numbers[5]);
+    views.push_back(v);
+  }
+  if (views.empty()) throw Error(fmt::format("{}: no eye in the file", path));
+  return views;
+}
+
+// pm extract --eye / --eye-path: the splits each viewer needs, fine near the eye and coarse far away or
+// out of view. Along a path one mesh is kept from view to view, so each view applies and undoes only
+// the splits that change.
+int run_selective(const PmCliOptions& o, const GlobalOptions& global, const std::vector<std::string>& inputs) {
+  const bool path = o.eye_path.has_value();
+  if (!o.pixel_error) throw Error(fmt::format("pm extract: {} needs a budget: --pixel-error", path ? "--eye-path" : "--eye"));
+  if (o.faces || o.ratio || o.max_error) throw Error("pm extract: --eye selects by --pixel-error alone");
+  if (o.prove_with) throw Error("pm extract: --prove-with proves uniform levels; it does not combine with --eye");
+  if (o.input_order) throw Error("pm extract: a selectively refined mesh is in stream order; --input-order does not combine with --eye");
+  if (path && !o.eye.empty()) throw Error("pm extract: give --eye or --eye-path, not both");
+  if (path && o.output == "-") throw Error("pm extract: --eye-path writes files OUT_000 ...: give OUT a file name");
+  if (o.morph_frames > 1 && !path) throw Error("pm extract: --morph-frames blends from view to view: it needs --eye-path");
+  if (o.morph_frames > 1 && o.fit_attributes)
+    throw Error("pm extract: --fit-attributes does not combine with --morph-frames (fitted values have no ancestors to blend from)");
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<PathView> lines = path ? read_eye_path(*o.eye_path) : std::vector<PathView>{{point_option(o.eye), {}, 0}};
+  const PmReadResult r = read_pm_input(o.input);
+  warn(r, global);
+  const ProgressiveMesh& pm = r.pm;
+  const LevelErrorKind kind = o.certified ? LevelErrorKind::Bound : LevelErrorKind::Measured;
+  const char* what = kind == LevelErrorKind::Bound ? "error bound" : "measured deviation";
+  const SelectiveRefiner refiner(pm);
+  SelectiveMesh kept(refiner);
+  std::optional<Mesh> finest;  // for --fit-attributes
+  if (o.fit_attributes) finest = extract_level(pm, pm.max_level(), VertexOrder::Input).mesh;
+  // Every viewer first, so that a bad line leaves no view written.
+  std::vector<Viewpoint> viewers;
+  for (const PathView& pv : lines) {
+    Viewpoint& view = viewers.emplace_back();
+    view.eye = pv.eye;
+    view.look_at = pv.look_at ? *pv.look_at : o.look_at.empty() ? pm.bounds.center() : point_option(o.look_at);
+    if (!o.no_cull && view.look_at == view.eye)
+      throw Error(fmt::format("pm extract: {}the eye ({}, {}, {}) is at the point looked at ({}); give a --look-at away from it, "
+                              "or --no-cull to refine in every direction",
+                              path ? fmt::format("{}:{}: ", *o.eye_path, pv.line) : "", view.eye.x(), view.eye.y(), view.eye.z(),
+                              pv.look_at ? "on its line" : o.look_at.empty() ? "the bounding box centre, with no --look-at" : "--look-at"));
+    view.fov_degrees = o.fov;
+    view.viewport_pixels = o.viewport;
+    view.aspect = o.aspect;
+    view.pixel_error = *o.pixel_error;
+    view.cull = !o.no_cull;
+    view.cull_backfaces = o.cull_backfaces;
+    view.unfold = !o.allow_folds;
+  }
+  nlohmann::json reports = nlohmann::json::array();
+  Index fewest = std::numeric_limits<Index>::max(), most = 0, changed = 0, unfolding_views = 0;
+  double widest = 0;
+  // With --morph-frames K, each step from one view to the next is K frames: K - 1 of the geomorph between
+  // them (alpha 1/K ... (K-1)/K), then the view itself.
+  const std::size_t per_step = static_cast<std::size_t>(o.morph_frames);
+  Mesh frame;
+  for (std::size_t i = 0; i < viewers.size(); ++i) {
+    const Viewpoint& view = viewers[i];
+    std::vector<std::string> morph_outputs;
+    Index morph_vertices = 0;
+    SelectiveLevel s;
+    if (i > 0 && per_step > 1) {
+      SelectiveMorph m = kept.morph_to_view(view, kind);
+      for (std::size_t k = 1; k < per_step; ++k) {
+        m.geomorph.evaluate(double(k) / double(per_step), frame);
+        morph_outputs.push_back(numbered(o.output, (i - 1) * per_step + k));
+        write_output(frame, morph_outputs.back(), o.format, WriteOptions{}, inputs);
+      }
+      morph_vertices = m.geomorph.fine.mesh.num_vertices();
+      s = std::move(m.reached);
+    } else {
+      s = kept.adapt(view, kind);
+    }
+    std::optional<AttributeFitReport> fit;
+    if (finest) fit = fit_attributes_to_input(*finest, s.extracted.mesh);
+    const std::string output = path ? numbered(o.output, i * per_step) : o.output;
+    write_output(s.extracted.mesh, output, o.format, WriteOptions{}, inputs);
+    // A uniform level within the same budget, for comparison: the one `--distance` would pick from here.
+    const ScreenSpaceBudget uniform{view.pixel_error, (pm.bounds.center() - view.eye).norm(), view.fov_degrees, view.viewport_pixels};
+    const Index uniform_faces = pm.num_faces(level_for_view(pm, uniform, selection_kind(o)));
+    const Index faces = s.extracted.mesh.num_faces();
+    fewest = std::min(fewest, faces), most = std::max(most, faces), widest = std::max(widest, s.max_pixels);
+    if (i > 0) changed += s.splits_refined + s.splits_coarsened;
+    unfolding_views += s.splits_unfolding > 0;
+    nlohmann::json j{{"output", output},
+                     {"eye", {view.eye.x(), view.eye.y(), view.eye.z()}},
+                     {"look_at", {view.look_at.x(), view.look_at.y(), view.look_at.z()}},
+                     {"faces", faces},
+                     {"vertices", s.extracted.mesh.num_vertices()},
+                     {"splits_applied", s.splits_applied},
+                     {"splits_refined", s.splits_refined},
+                     {"splits_coarsened", s.splits_coarsened},
+                     {"splits_unfolding", s.splits_unfolding},
+                     {"error_bound", s.error_bound},
+                     {"deviation", s.deviation},
+                     {"max_pixels", s.max_pixels},
+                     {"regions_out_of_view", s.regions_outside},
+                     {"regions_facing_away", s.regions_facing_away},
+                     {"uniform_level_faces", uniform_faces}};
+    if (fit) j["attribute_fit"] = attribute_fit_json(*fit);
+    if (!morph_outputs.empty()) j["morph_outputs"] = morph_outputs, j["morph_vertices"] = morph_vertices;
+    if (!path && !o.json && !global.quiet) {
+      fmt::print(stderr,
+                 "pm extract: selective refinement for the eye at ({}, {}, {}): {} faces, {} vertices, {} of {} splits{}; {} "
+                 "projects to at most {:.3g} px in view (budget {} px); deviation {:.6g}, bound {:.6g}{}{}; read {} bytes, "
+                 "{:.1f} ms\n",
+                 view.eye.x(), view.eye.y(), view.eye.z(), thousands(faces), thousands(s.extracted.mesh.num_vertices()),
+                 thousands(s.splits_applied), thousands(pm.max_level()),
+                 s.splits_unfolding ? fmt::format(" ({} to unfold faces that folded)", thousands(s.splits_unfolding)) : "", what, s.max_pixels, view.pixel_error, s.deviation,
+                 s.error_bound, s.regions_outside ? fmt::format(", {} regions out of view left coarse", thousands(s.regions_outside)) : "",
+                 s.regions_facing_away ? fmt::format(", {} facing away", thousands(s.regions_facing_away)) : "",
+                 thousands(static_cast<long long>(r.bytes_read)),
+                 1000 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      fmt::print(stderr, "  a uniform level within the same budget from this distance has {} faces\n", thousands(uniform_faces));
+      if (fit) print_attribute_fit(*fit);
+    }
+    reports.push_back(std::move(j));
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (o.json) {
+    nlohmann::json j{{"file", o.input}, {"selective", true}, {"splits", pm.max_level()}, {"selected_by", what}};
+    if (path) {
+      j["eye_path"] = *o.eye_path;
+      j["views"] = std::move(reports);
+    } else {
+      j.update(reports[0]);
+    }
+    j["bytes_read"] = r.bytes_read;
+    j["seconds"] = seconds;
+    fmt::print("{}\n", j.dump(2));
+  } else if (path && !global.quiet) {
+    fmt::print(stderr,
+               "pm extract: {} views along {}, one mesh kept from view to view: {} to {} faces, {:.1f} of {} splits applied or "
+               "undone per view after the first{}; {} projects to at most {:.3g} px in view (budget {} px); {}{} ... {} in {:.2f} s\n",
+               viewers.size(), *o.eye_path, thousands(fewest), thousands(most),
+               viewers.size() > 1 ? double(changed) / double(viewers.size() - 1) : 0.0, thousands(pm.max_level()),
+               unfolding_views ? fmt::format(" ({} views refined further to unfold faces that folded)", unfolding_views) : "", what, widest,
+               *o.pixel_error,
+               per_step > 1 ? fmt::format("each change blended in over {} frames (geomorphs), views every {} frames: ", per_step, per_step) : "",
+               numbered(o.output, 0), numbered(o.output, (viewers.size() - 1) * per_step), seconds);
+  }
+  return 0;
 }
 
 int run_extract(const PmCliOptions& o, const GlobalOptions& global) {
@@ -315,12 +525,9 @@ int run_geomorph(const PmCliOptions& o, const GlobalOptions& global) {
 }
 
 }  // namespace
-}  // namespace lodkit::cli::pm
-
-namespace lodkit::cli {
 
 Command add_pm_command(CLI::App& app, const GlobalOptions& global) {
-  auto opt = std::make_shared<pm::PmCliOptions>();
+  auto opt = std::make_shared<PmCliOptions>();
   CLI::App* pm = app.add_subcommand("pm", "Progressive meshes: build a .pm stream, inspect it, extract levels, geomorph");
   pm->require_subcommand(1);
   pm->footer(R"(Examples:
@@ -457,10 +664,10 @@ Examples:
   lodkit pm geomorph bunny.pm --from 1000 --to 4000 --frames 30 -o morph.ply   # morph_000.ply ... morph_029.ply)");
 
   return {pm, [opt, &global, build, info, extract] {
-            if (build->parsed()) return pm::run_build(*opt, global);
-            if (info->parsed()) return pm::run_info(*opt, global);
-            if (extract->parsed()) return pm::run_extract(*opt, global);
-            return pm::run_geomorph(*opt, global);
+            if (build->parsed()) return run_build(*opt, global);
+            if (info->parsed()) return run_info(*opt, global);
+            if (extract->parsed()) return run_extract(*opt, global);
+            return run_geomorph(*opt, global);
           }};
 }
 
