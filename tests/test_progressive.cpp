@@ -71,6 +71,7 @@ TEST(ProgressiveMesh, LevelsEqualSimplifyToTheSameFaceCount) {
         so.refit_passes = 0;
         so.hoppe_fit_passes = 0;
         so.fit_attributes = false;
+        so.hoppe_energy_from = 0;  // a progressive mesh's collapses are ranked by hoppe's energy throughout
         so.target_faces = pm.num_faces(level);
         const SimplifyResult r = simplify(input, so);
         const ExtractedLevel e = extract_level(pm, level);
@@ -96,6 +97,7 @@ TEST(ProgressiveMesh, LevelsEqualSimplifyWithAttributeAwareCosts) {
       so.refit_passes = 0;
       so.hoppe_fit_passes = 0;
       so.fit_attributes = false;
+      so.hoppe_energy_from = 0;  // as the progressive mesh's collapses
       so.target_faces = pm.num_faces(level);
       const SimplifyResult r = simplify(input, so);
       const Mesh m = extract_level(pm, level).mesh;

@@ -39,6 +39,7 @@ struct SimplifyCliOptions {
   Index hoppe_min_points = SimplifyOptions{}.hoppe_min_points;
   double hoppe_crease_angle = SimplifyOptions{}.hoppe_crease_angle_deg;
   int hoppe_fit_passes = SimplifyOptions{}.hoppe_fit_passes;
+  double hoppe_energy_from = SimplifyOptions{}.hoppe_energy_from;
   Index lane_faces = -1;  // unset: by method
   Index max_valence = -1;  // unset: by method
   int refit_passes = -1;   // unset: by method
@@ -255,6 +256,7 @@ int run_simplify(SimplifyCliOptions o, const GlobalOptions& global) {
   s.hoppe_min_points = o.hoppe_min_points;
   s.hoppe_crease_angle_deg = o.hoppe_crease_angle;
   s.hoppe_fit_passes = o.hoppe_fit_passes;
+  s.hoppe_energy_from = o.hoppe_energy_from;
   if (o.lane_faces >= 0) s.lane_faces = o.lane_faces;
   if (o.max_valence >= 0) s.max_valence = o.max_valence;
   if (o.refit_passes >= 0) s.refit_passes = o.refit_passes;
@@ -303,6 +305,7 @@ int run_simplify(SimplifyCliOptions o, const GlobalOptions& global) {
       j["hausdorff_limit"]["view"] = {{"pixel_error", *o.pixel_error}, {"distance", o.distance}, {"fov", o.fov},
                                       {"viewport", o.viewport}};
     if (r.turn_limit_relaxed_at) j["turn_limit_relaxed_at_faces"] = *r.turn_limit_relaxed_at;
+    if (r.hoppe_energy_from_faces) j["hoppe_energy_from_faces"] = *r.hoppe_energy_from_faces;
     if (r.hoppe_fit)
       j["hoppe_fit"] = {{"passes", r.hoppe_fit->passes}, {"energy_before", r.hoppe_fit->energy_before},
                         {"energy_after", r.hoppe_fit->energy_after}, {"points_sent_back", r.hoppe_fit->points_sent_back},
@@ -342,6 +345,9 @@ int run_simplify(SimplifyCliOptions o, const GlobalOptions& global) {
     else
       fmt::print(stderr, "  error estimate {:.6g} ({:.4f}% of the diagonal)\n", r.error, r.error * pct);
     if (r.lanes > 1) fmt::print(stderr, "  {} slabs simplified side by side, then one queue for the rest\n", r.lanes);
+    if (r.hoppe_energy_from_faces)
+      fmt::print(stderr, "  the quadric error ranked the collapses down to {} faces, hoppe's energy from there\n",
+                 thousands(*r.hoppe_energy_from_faces));
     if (r.refit)
       fmt::print(stderr, "  refit: largest sampled distance {:.4f}% -> {:.4f}%, RMS {:.5f}% -> {:.5f}%, in {} + {} steps ({:.3f} s)\n",
                  r.refit->sampled_max_before * pct, r.refit->sampled_max_after * pct, r.refit->sampled_rms_before * pct,
@@ -439,6 +445,11 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   "hoppe: after the collapses, move every vertex at once to lower E_dist + E_spring (Mesh "
                   "optimization's position step), in this many passes (0 = none)")
       ->check(kNonNegative)->capture_default_str();
+  sub->add_option("--hoppe-energy-from", opt->hoppe_energy_from,
+                  "hoppe: its energy ranks the collapses once the mesh is within this many times the face target; "
+                  "the quadric error ranks the early, small ones, as well and in a fraction of the time (up to 1 = "
+                  "the energy from the first collapse, as in the paper)")
+      ->check(in_range(0.0, 1e9))->capture_default_str();
   sub->add_option("--lane-faces", opt->lane_faces,
                   "Meshes of twice this many faces are first simplified in slabs of about this many faces side by "
                   "side (0 = one queue throughout; default 125000 for quadric and edge-length, 8000 for hoppe)")
@@ -485,7 +496,7 @@ Command add_simplify_command(CLI::App& app, const GlobalOptions& global) {
                   "the edge-collapse methods (quadric, hoppe, edge-length)");
     refuse_unless(m == "schroeder", {"--feature-angle", "--aspect-ratio", "--accumulate-error"}, "--method schroeder");
     refuse_unless(m == "hoppe", {"--seed", "--hoppe-samples", "--hoppe-every-face", "--hoppe-min-points",
-                                 "--hoppe-crease-angle", "--hoppe-fit-passes"}, "--method hoppe");
+                                 "--hoppe-crease-angle", "--hoppe-fit-passes", "--hoppe-energy-from"}, "--method hoppe");
     refuse_unless(m == "quadric", {"--crease-weight"}, "--method quadric");
   });
   sub->footer(R"(Stops at whichever comes first: --faces, --ratio or --max-error (default: half the faces).
@@ -502,6 +513,7 @@ Examples:
   lodkit simplify part.obj -o part_lo.obj --method schroeder --max-error 0.05% --feature-angle 30
   lodkit simplify fandisk.obj -o fandisk_lo.ply --ratio 0.1 --method hoppe
   lodkit simplify bunny.ply -o bunny_h.ply --ratio 0.1 --method hoppe --hoppe-fit-passes 3   # refit E in 3 passes
+  lodkit simplify bunny.ply -o bunny_h.ply --ratio 0.1 --method hoppe --hoppe-energy-from 0   # the energy throughout
   lodkit simplify counter.ply -o counter_lo.ply --ratio 0.01 --max-normal-change 90
   lodkit simplify suzanne_flat.ply -o suzanne_lo.ply --ratio 0.1 --recompute-normals
   lodkit simplify scan_rgb.ply -o scan_lo.ply --ratio 0.1 --measure   # colours fitted to the input's; their RMS measured

@@ -220,6 +220,11 @@ class Engine {
   /// Collapse u -> v to p, refused only for faces facing against the input, let be after all: the
   /// other checks' verdict, and where the run did so when it did.
   Rejection let_inverted_be(Lane& lane, Index u, Index v, const Eigen::Vector3d& p);
+  /// hoppe: the faces down to which the quadric error ranks the collapses (SimplifyOptions::hoppe_energy_from),
+  /// or 0 where the cost's own scores rank them all.
+  Index quadric_until(Index target) const;
+  /// The edges rated and queued, for a stage down to `target` faces: into the lanes when the mesh is large.
+  void queue_edges(const std::vector<std::pair<Index, Index>>& edges, Index target);
   /// Calls the progress callback, about once a percent, with `alive` faces left.
   void report_progress(Index alive);
   /// The cheapest legal collapse of a boundary edge (it removes one face), if any.
@@ -305,7 +310,9 @@ class Engine {
   double max_error_ = 0;
   Index collapses_ = 0, locked_ = 0, dropped_ = 0;
   bool faces_disagree_ = false;
-  Index target_ = 0;  // the run's face target
+  Index target_ = 0;        // the face target of the run's current stage
+  Index final_target_ = 0;  // the run's
+  std::optional<Index> energy_from_;  // faces left when hoppe's energy took over from the quadric error
   Index faces_before_ = 0, next_report_ = 0;  // for the progress callback
   int lanes_used_ = 1;
   std::vector<CollapseRecord> records_;

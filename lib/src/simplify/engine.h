@@ -124,6 +124,11 @@ class CostModel {
   virtual double fit_measure(const EngineState&) { return 0; }
   /// True if one score costs enough (tens of microseconds) to share even a handful across threads.
   virtual bool costly() const { return false; }
+  /// True while the cost scores by the quadric error in place of its own (hoppe, until
+  /// SimplifyOptions::hoppe_energy_from); own_scores() ends that. Everything else, such as keeping the
+  /// points on their faces, goes on as ever.
+  virtual bool scores_by_quadric() const { return false; }
+  virtual void own_scores() {}
 };
 
 std::unique_ptr<CostModel> make_quadric_cost(const SimplifyOptions& options);

@@ -265,9 +265,21 @@ std::string Engine::stop_report(Index target, BlockedEdges& blocked) {
                      s_.alive_faces, target, remaining, why.empty() ? "no edges left" : why, locked_);
 }
 
+Index Engine::quadric_until(Index target) const {
+  if (!cost_->scores_by_quadric() || target <= 0) return 0;
+  const double until = std::ceil(o_.hoppe_energy_from * double(target));  // above target: the factor is above 1
+  return until < double(s_.alive_faces) ? static_cast<Index>(until) : 0;
+}
+
+void Engine::queue_edges(const std::vector<std::pair<Index, Index>>& edges, Index target) {
+  target_ = target;
+  std::vector<HeapEntry> first = rate_all(edges);
+  if (!run_lanes(first)) main_.queue.load(std::move(first));
+}
+
 void Engine::report_progress(Index alive) {
   if (!o_.progress || faces_before_ - alive < next_report_) return;
-  const Index to_remove = std::max<Index>(1, faces_before_ - target_);
+  const Index to_remove = std::max<Index>(1, faces_before_ - final_target_);
   o_.progress(std::min(1.0, double(faces_before_ - alive) / to_remove));
   next_report_ += std::max<Index>(1, to_remove / 100);
 }
@@ -278,20 +290,32 @@ SimplifyResult Engine::run(Index target) {
   result.vertices_in = s_.input->num_vertices();
   result.target_faces = target;
   faces_before_ = s_.alive_faces;
-  target_ = target;
+  final_target_ = target;
 
   // Every edge once, scored in both directions; on a large mesh the lanes do most of the work first.
-  {
-    std::vector<std::pair<Index, Index>> edges;
-    edges.reserve(edges_.size());
-    for (const EdgeUse& e : edges_)
-      if (e.faces <= 2) edges.push_back({e.lo, e.hi});
-    edges_ = {};
-    std::vector<HeapEntry> first = rate_all(edges);
-    if (!run_lanes(first)) main_.queue.load(std::move(first));
-  }
+  std::vector<std::pair<Index, Index>> edges;
+  edges.reserve(edges_.size());
+  for (const EdgeUse& e : edges_)
+    if (e.faces <= 2) edges.push_back({e.lo, e.hi});
+  edges_ = {};
   // The best legal collapse, kept back when it would remove two faces and one is left to remove.
   std::optional<std::pair<Index, Index>> deferred;
+  if (const Index until = quadric_until(target); until > 0) {
+    // hoppe ranks by the quadric error down to `until` faces (SimplifyOptions::hoppe_energy_from); then
+    // what is queued goes, and every edge left is rated afresh by the energy.
+    queue_edges(edges, until);
+    drain(main_, [&] { return s_.alive_faces <= until; }, deferred);
+    deferred.reset();
+    main_.queue.take();
+    for (auto& list : scored_) list.clear();
+    main_.stale_estimate = 0;
+    main_.waited.clear();
+    main_.paid = 0;  // (in the quadric's units)
+    energy_from_ = s_.alive_faces;
+    edges = remaining_edges();
+  }
+  cost_->own_scores();
+  queue_edges(edges, target);
   drain(main_, [&] { return s_.alive_faces <= target; }, deferred);
   // The queue ran dry above the target. An edge refused when it was last rated is rated again only when
   // a collapse keeps one of its ends, so one that a collapse beside it made legal (a face there no
@@ -336,6 +360,7 @@ SimplifyResult Engine::run(Index target) {
                                       "where the default limit of {:g} held every collapse back",
                                       total_turn_deg_, *relaxed_at_, starting_total_turn_deg());
   }
+  result.hoppe_energy_from_faces = energy_from_;
   if (inverted_allowed_at_) {
     result.inverted_allowed_at = *inverted_allowed_at_;
     result.reason_text += fmt::format("; faces were let face against the input from {} faces on, where the "

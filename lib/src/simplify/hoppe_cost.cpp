@@ -56,6 +56,7 @@ class HoppeCost final : public CostModel {
     }
     sample_boundary(s);
     sample_creases(s);
+    if (o.hoppe_energy_from > 1 && !o.record_collapses) by_quadric_ = make_quadric_cost(o);
   }
 
   // Two points per boundary edge: where it starts (in its face's order, so each boundary vertex once)
@@ -111,11 +112,27 @@ class HoppeCost final : public CostModel {
     return std::max(o.hoppe_points_per_face, std::min(1000.0, double(wanted - points) / double(faces)));
   }
 
-  bool wide_update() const override { return true; }
+  // (The quadric's scores change only at the collapse's own edges.)
+  bool wide_update() const override { return !by_quadric_; }
   bool costly() const override { return true; }
+  bool scores_by_quadric() const override { return by_quadric_ != nullptr; }
+  void own_scores() override { by_quadric_.reset(); }
 
   bool score(const EngineState& s, const Probe& probe, Index u, Index v, Freedom freedom, Candidate& out) override {
+    if (by_quadric_) return leaves_a_face(s, u, v) && by_quadric_->score(s, probe, u, v, freedom, out);
     return scorers_.local().score(s, probe, u, v, freedom, probe.shared.size() == 1, out);
+  }
+
+  // A collapse that removes every face at u and v (an isolated triangle, without the topology checks)
+  // leaves their points no face to go to. The energy refuses it (HoppeScorer::score()); the quadric
+  // stage must too.
+  static bool leaves_a_face(const EngineState& s, Index u, Index v) {
+    auto has = [&](Index f, Index p) { return s.corner_point(f, 0) == p || s.corner_point(f, 1) == p || s.corner_point(f, 2) == p; };
+    for (Index f : s.faces_of(u))
+      if (!has(f, v)) return true;
+    for (Index f : s.faces_of(v))
+      if (!has(f, u)) return true;
+    return false;
   }
 
   bool places_attributes() const override { return dims_ > 0; }
@@ -332,6 +349,7 @@ class HoppeCost final : public CostModel {
     return d2;
   }
 
+  std::unique_ptr<CostModel> by_quadric_;  ///< scores in place of the energy until own_scores()
   FaceSamples face_samples_;
   FaceValues face_values_;  ///< with E_scalar (attribute weights), else empty; k + 2 numbers per point: its
                             ///< values, their squared distance to the mesh's, and the point's chart

@@ -51,6 +51,9 @@ void check_options(const SimplifyOptions& options) {
   if (!(options.hoppe_crease_angle_deg >= 0 && options.hoppe_crease_angle_deg <= 180))
     throw Error(fmt::format("simplify: hoppe's crease angle must be between 0 and 180 degrees, got {}",
                             options.hoppe_crease_angle_deg));
+  if (!(std::isfinite(options.hoppe_energy_from) && options.hoppe_energy_from >= 0))
+    throw Error(fmt::format("simplify: hoppe's energy-from factor must be finite and not negative, got {}",
+                            options.hoppe_energy_from));
   if (options.hoppe_fit_passes < 0)
     throw Error(fmt::format("simplify: hoppe's fit passes must not be negative, got {}", options.hoppe_fit_passes));
   const AttributeWeights& w = options.attribute_weights;
