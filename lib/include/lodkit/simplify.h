@@ -305,7 +305,8 @@ struct SimplifyResult {
   Index collapses = 0;
   /// The largest error estimate of any collapse performed: for Quadric and EdgeLength the RMS distance
   /// from the merged vertex to the planes of the faces it replaced (sqrt of quadric error / area);
-  /// for Hoppe the RMS distance of the sampled points to the mesh.
+  /// for Hoppe the RMS distance of the sampled points to the mesh (the quadric's before the energy took
+  /// over: hoppe_energy_from_faces).
   double error = 0.0;
   StopReason reason = StopReason::TargetReached;
   std::string reason_text;          ///< one human sentence: why it stopped where it did
