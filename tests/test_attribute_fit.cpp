@@ -6,7 +6,6 @@
 #include <lodkit/simplify.h>
 
 #include <map>
-#include <tbb/global_control.h>
 
 #include "test_util.h"
 
@@ -113,10 +112,11 @@ TEST(AttributeFit, SameValuesOnAnyThreadCount) {
   const Mesh input = painted_sphere();
   const Mesh carried = simplified(input, false).mesh;
   auto fitted_on = [&](int threads) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-    Mesh m = carried;
-    fit_attributes_to_input(input, m);
-    return m;
+    return test::on_threads(threads, [&] {
+      Mesh m = carried;
+      fit_attributes_to_input(input, m);
+      return m;
+    });
   };
   const Mesh one = fitted_on(1), four = fitted_on(4);
   EXPECT_EQ(one.attributes.normals, four.attributes.normals);

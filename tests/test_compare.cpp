@@ -7,7 +7,6 @@
 
 #include <lodkit/simplify.h>
 
-#include <tbb/global_control.h>
 
 #include "core/uv_charts.h"
 #include "metrics/aabb_tree.h"
@@ -199,12 +198,8 @@ TEST(Compare, FindsASingleSpike) {
 TEST(Compare, SameAnswerForAnyThreadCount) {
   const Mesh a = make_uv_sphere({.segments = 40, .rings = 20});
   const Mesh b = make_icosphere({.subdivisions = 3});
-  Comparison one, many;
-  {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    one = compare(a, b);
-  }
-  many = compare(a, b);
+  const Comparison one = test::on_threads(1, [&] { return compare(a, b); });
+  const Comparison many = test::on_threads(4, [&] { return compare(a, b); });
   EXPECT_EQ(one.hausdorff, many.hausdorff);
   EXPECT_EQ(one.rms, many.rms);
   EXPECT_EQ(one.mean, many.mean);

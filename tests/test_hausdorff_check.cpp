@@ -7,7 +7,6 @@
 #include <lodkit/simplify.h>
 
 #include <cmath>
-#include <tbb/global_control.h>
 
 #include "test_util.h"
 
@@ -146,11 +145,8 @@ TEST(SimplifyWithin, TheLevelFoundIsWithinAndALevelJustCoarserIsNot) {
 TEST(SimplifyWithin, SameAnswerForAnyThreadCount) {
   const Mesh fine = test::bumpy_sphere(3, 0.05);
   const double limit = 0.01 * bounding_box(fine).diagonal().norm();
-  const SimplifyResult many = simplify_within(fine, limit);
-  const SimplifyResult one = [&] {
-    const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
-    return simplify_within(fine, limit);
-  }();
+  const SimplifyResult one = test::on_threads(1, [&] { return simplify_within(fine, limit); });
+  const SimplifyResult many = test::on_threads(4, [&] { return simplify_within(fine, limit); });
   EXPECT_EQ(one.mesh.positions, many.mesh.positions);
   EXPECT_EQ(one.mesh.triangles, many.mesh.triangles);
   EXPECT_EQ(one.within->bound, many.within->bound);

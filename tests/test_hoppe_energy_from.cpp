@@ -9,7 +9,6 @@
 
 #include <cmath>
 #include <limits>
-#include <tbb/global_control.h>
 
 #include "test_util.h"
 
@@ -86,10 +85,7 @@ TEST(HoppeEnergyFrom, SameResultForAnyNumberOfThreads) {
   const Mesh sphere = test::bumpy_sphere(5, 0.04);
   SimplifyOptions o = hoppe_options(800, 2);
   o.lane_faces = 400;
-  auto on_threads = [&](int threads) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-    return simplify(sphere, o);
-  };
+  auto on_threads = [&](int threads) { return test::on_threads(threads, [&] { return simplify(sphere, o); }); };
   const SimplifyResult one = on_threads(1), many = on_threads(4);
   EXPECT_GT(one.lanes, 1);
   EXPECT_EQ(one.hoppe_energy_from_faces, many.hoppe_energy_from_faces);

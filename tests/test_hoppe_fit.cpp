@@ -9,7 +9,6 @@
 
 #include <cmath>
 #include <numbers>
-#include <tbb/global_control.h>
 
 #include "test_util.h"
 
@@ -84,10 +83,7 @@ TEST(HoppeFit, SameResultForAnyNumberOfThreads) {
   const Mesh patch = wavy_patch();
   SimplifyOptions o{.method = SimplifyMethod::Hoppe, .target_ratio = 0.1, .lane_faces = 400};
   o.hoppe_fit_passes = 3;
-  auto on_threads = [&](int threads) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-    return simplify(patch, o);
-  };
+  auto on_threads = [&](int threads) { return test::on_threads(threads, [&] { return simplify(patch, o); }); };
   const SimplifyResult one = on_threads(1), many = on_threads(4);
   EXPECT_EQ(one.lanes, 8);
   ASSERT_TRUE(one.hoppe_fit && many.hoppe_fit);

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <tbb/global_control.h>
 
 #include "test_util.h"
 
@@ -136,10 +135,7 @@ TEST(HoppeScalar, SameResultForAnyNumberOfThreads) {
   const Mesh grid = colour_disc_grid(64);  // 8,192 faces, in lanes of 1,000
   SimplifyOptions o{.method = SimplifyMethod::Hoppe, .target_ratio = 0.1, .lane_faces = 1000};
   o.attribute_weights = {0, 0, 0.1};
-  auto on_threads = [&](int threads) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-    return simplify(grid, o);
-  };
+  auto on_threads = [&](int threads) { return test::on_threads(threads, [&] { return simplify(grid, o); }); };
   const SimplifyResult one = on_threads(1), many = on_threads(4);
   EXPECT_GT(one.lanes, 1);
   EXPECT_EQ(one.mesh.positions, many.mesh.positions);

@@ -7,8 +7,6 @@
 #include <lodkit/simplify.h>
 
 #include <map>
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 
 #include "test_util.h"
 
@@ -214,18 +212,13 @@ TEST(Refit, SameResultForAnyNumberOfThreads) {
   const Mesh fine = test::bumpy_sphere(4, 0.04);
   const SimplifyResult coarse = unrefit(fine, 0.05);
   Mesh one = coarse.mesh, many = coarse.mesh;
-  {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    refit_to_input(fine, one, {}, coarse.face_origin);
-  }
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
-  refit_to_input(fine, many, {}, coarse.face_origin);
+  test::on_threads(1, [&] { refit_to_input(fine, one, {}, coarse.face_origin); });
+  test::on_threads(4, [&] { refit_to_input(fine, many, {}, coarse.face_origin); });
   EXPECT_EQ(one.positions, many.positions);
   // The solve splits the points among as many tasks as the arena runs at once.
   for (const int concurrency : {3, 5}) {
     Mesh split = coarse.mesh;
-    tbb::task_arena arena(concurrency);
-    arena.execute([&] { refit_to_input(fine, split, {}, coarse.face_origin); });
+    test::on_threads(concurrency, [&] { refit_to_input(fine, split, {}, coarse.face_origin); });
     EXPECT_EQ(one.positions, split.positions) << concurrency;
   }
 }

@@ -11,7 +11,6 @@
 #include <limits>
 #include <numbers>
 #include <random>
-#include <tbb/global_control.h>
 
 #include "simplify/queue.h"
 #include "test_util.h"
@@ -107,13 +106,8 @@ TEST(Simplify, SameResultForAnyNumberOfThreads) {
     SimplifyOptions o;
     o.method = method;
     o.target_ratio = 0.1;
-    SimplifyResult one;
-    {
-      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-      one = simplify(m, o);
-    }
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
-    const SimplifyResult many = simplify(m, o);
+    const SimplifyResult one = test::on_threads(1, [&] { return simplify(m, o); });
+    const SimplifyResult many = test::on_threads(4, [&] { return simplify(m, o); });
     EXPECT_EQ(one.mesh.positions, many.mesh.positions);
     EXPECT_EQ(one.mesh.triangles, many.mesh.triangles);
     EXPECT_EQ(one.error, many.error);

@@ -2,8 +2,13 @@
 // Helpers shared by the tests: scratch directories and tiny hand-built meshes.
 #include <lodkit/mesh.h>
 
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <cstddef>
 #include <filesystem>
 #include <string>
+#include <utility>
 
 namespace lodkit::test {
 
@@ -20,6 +25,16 @@ class ScratchDir {
  private:
   std::filesystem::path path_;
 };
+
+/// f() on `threads` threads: an arena of that many slots, with TBB allowed as many workers, so that
+/// four threads are four even on a two-core machine (the default arena has one slot per core). For the
+/// tests that a result does not depend on the thread count.
+template <typename F>
+auto on_threads(int threads, F&& f) {
+  const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  tbb::task_arena arena(threads);
+  return arena.execute(std::forward<F>(f));
+}
 
 void write_text(const std::filesystem::path& path, const std::string& text);
 std::string read_bytes(const std::filesystem::path& path);
