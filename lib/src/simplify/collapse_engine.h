@@ -171,6 +171,9 @@ class Engine {
   void remember(const HeapEntry& e, const Candidate& c);
   /// The candidate remember() kept for e, if e's tags still match it.
   bool recall(const HeapEntry& e, Candidate& c) const;
+  /// Drops every candidate remember() kept: at a change of queue (a lane pass, the quadric stage's end),
+  /// where an entry's tags no longer tell whether its candidate still holds.
+  void forget_candidates();
   /// The queue entry of edge ab, in its cheaper legal direction, if either is (thread-safe); that
   /// direction's candidate into `chosen` when given.
   std::optional<HeapEntry> rate_edge(Index a, Index b, Index region, std::array<Probe, 2>& probes,

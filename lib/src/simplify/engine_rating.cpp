@@ -28,6 +28,10 @@ bool Engine::recall(const HeapEntry& e, Candidate& c) const {
   return false;
 }
 
+void Engine::forget_candidates() {
+  for (auto& list : scored_) list.clear();
+}
+
 std::optional<HeapEntry> Engine::rate_edge(Index a, Index b, Index region, std::array<Probe, 2>& probes,
                                            Candidate* chosen) {
   // Cheap checks per direction, then the cost. When neither end is constrained both directions merge

@@ -108,7 +108,7 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
   region_ = std::move(slabs.region);
   // Costly costs keep their last candidates per point; one kept across passes may name a point now in
   // another lane, whose tags that lane moves meanwhile. Dropped: those entries are scored again.
-  for (auto& list : scored_) list.clear();
+  forget_candidates();
   std::vector<Lane> lanes(slabs.faces.size());
   for (std::size_t i = 0; i < lanes.size(); ++i) {
     lanes[i].region = static_cast<Index>(i);
@@ -307,7 +307,7 @@ SimplifyResult Engine::run(Index target) {
     drain(main_, [&] { return s_.alive_faces <= until; }, deferred);
     deferred.reset();
     main_.queue.take();
-    for (auto& list : scored_) list.clear();
+    forget_candidates();
     main_.stale_estimate = 0;
     main_.waited.clear();
     main_.paid = 0;  // (in the quadric's units)
