@@ -85,8 +85,8 @@ TEST(HoppeEnergyFrom, SameResultForAnyNumberOfThreads) {
   const Mesh sphere = test::bumpy_sphere(5, 0.04);
   SimplifyOptions o = hoppe_options(800, 2);
   o.lane_faces = 400;
-  auto on_threads = [&](int threads) { return test::on_threads(threads, [&] { return simplify(sphere, o); }); };
-  const SimplifyResult one = on_threads(1), many = on_threads(4);
+  const auto run = [&] { return simplify(sphere, o); };
+  const SimplifyResult one = test::on_threads(1, run), many = test::on_threads(4, run);
   EXPECT_GT(one.lanes, 1);
   EXPECT_EQ(one.hoppe_energy_from_faces, many.hoppe_energy_from_faces);
   EXPECT_EQ(one.mesh.positions, many.mesh.positions);

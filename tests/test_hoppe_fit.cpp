@@ -83,8 +83,8 @@ TEST(HoppeFit, SameResultForAnyNumberOfThreads) {
   const Mesh patch = wavy_patch();
   SimplifyOptions o{.method = SimplifyMethod::Hoppe, .target_ratio = 0.1, .lane_faces = 400};
   o.hoppe_fit_passes = 3;
-  auto on_threads = [&](int threads) { return test::on_threads(threads, [&] { return simplify(patch, o); }); };
-  const SimplifyResult one = on_threads(1), many = on_threads(4);
+  const auto run = [&] { return simplify(patch, o); };
+  const SimplifyResult one = test::on_threads(1, run), many = test::on_threads(4, run);
   EXPECT_EQ(one.lanes, 8);
   ASSERT_TRUE(one.hoppe_fit && many.hoppe_fit);
   EXPECT_GT(one.hoppe_fit->passes, 1);

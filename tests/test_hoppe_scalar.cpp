@@ -135,8 +135,8 @@ TEST(HoppeScalar, SameResultForAnyNumberOfThreads) {
   const Mesh grid = colour_disc_grid(64);  // 8,192 faces, in lanes of 1,000
   SimplifyOptions o{.method = SimplifyMethod::Hoppe, .target_ratio = 0.1, .lane_faces = 1000};
   o.attribute_weights = {0, 0, 0.1};
-  auto on_threads = [&](int threads) { return test::on_threads(threads, [&] { return simplify(grid, o); }); };
-  const SimplifyResult one = on_threads(1), many = on_threads(4);
+  const auto run = [&] { return simplify(grid, o); };
+  const SimplifyResult one = test::on_threads(1, run), many = test::on_threads(4, run);
   EXPECT_GT(one.lanes, 1);
   EXPECT_EQ(one.mesh.positions, many.mesh.positions);
   EXPECT_EQ(one.mesh.triangles, many.mesh.triangles);
