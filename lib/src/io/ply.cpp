@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/huge_pages.h"
 #include "io/formats.h"
 #include "io/text_cursor.h"
 
@@ -301,6 +302,7 @@ Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>*
       have_xyz = has[int(Role::X)] && has[int(Role::Y)] && has[int(Role::Z)];
       if (!have_xyz) throw Error(fmt::format("{}: vertex element lacks x, y or z", name));
       mesh.positions.resize(e.count, 3);
+      advise_huge_pages(mesh.positions.data(), sizeof(double) * 3 * static_cast<std::size_t>(e.count));
       if (has[int(Role::NX)] && has[int(Role::NY)] && has[int(Role::NZ)])
         mesh.attributes.normals.resize(e.count, 3);
       if (has[int(Role::U)] && has[int(Role::V)]) mesh.attributes.uvs.resize(e.count, 2);
@@ -319,7 +321,7 @@ Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>*
     if (is_face && e.count > 0 && !face_indices)
       throw Error(fmt::format("{}: the face element has no vertex_indices list", name));
     if (is_face && face_colour) face_rgba.reserve(static_cast<std::size_t>(4 * e.count));
-    if (is_face) tris.reserve(static_cast<std::size_t>(3 * e.count));
+    if (is_face) reserve_huge(tris, static_cast<std::size_t>(3 * e.count));
 
     // Rows without properties hold nothing, and no file size bounds their count: not looped over.
     if (e.properties.empty()) continue;
@@ -400,6 +402,8 @@ Mesh read_ply(std::string_view bytes, const std::string& name, std::vector<int>*
   if (!have_vertices) throw Error(fmt::format("{}: PLY file has no vertex element", name));
 
   const auto nf = static_cast<Index>(tris.size() / 3);
+  mesh.triangles.resize(nf, 3);
+  advise_huge_pages(mesh.triangles.data(), sizeof(Index) * tris.size());
   mesh.triangles = Eigen::Map<const Triangles>(tris.data(), nf, 3);
   if (!face_rgba.empty()) mesh.attributes.face_colours = Eigen::Map<const Colours>(face_rgba.data(), nf, 4);
   return mesh;

@@ -13,6 +13,7 @@
 #endif
 #include <tbb/parallel_for.h>
 
+#include "core/huge_pages.h"
 #include "core/geometry.h"
 
 namespace lodkit::detail {
@@ -206,16 +207,16 @@ AabbTree::Hit AabbTree::closest(const Eigen::Vector3d& p, Index hint) const {
 
 void AabbTree::prepare_facing() {
   const Index n = mesh_.num_faces();
-  normals_.assign(static_cast<std::size_t>(n), Eigen::Vector3d::Zero());
+  assign_huge(normals_, static_cast<std::size_t>(n), Eigen::Vector3d(Eigen::Vector3d::Zero()));
   tbb::parallel_for(Index{0}, n, [&](Index f) {
     const Eigen::Vector3d a = mesh_.positions.row(mesh_.triangles(f, 0)), b = mesh_.positions.row(mesh_.triangles(f, 1)),
                           c = mesh_.positions.row(mesh_.triangles(f, 2));
     const Eigen::Vector3d normal = (b - a).cross(c - a);
     if (const double length = normal.norm(); length > 0) normals_[f] = normal / length;
   });
-  cones_.assign(nodes_.size(), Cone{Eigen::Vector3d::Zero(), -1});
+  assign_huge(cones_, nodes_.size(), Cone{Eigen::Vector3d::Zero(), -1});
   certificates_.clear();
-  leaf_of_.assign(static_cast<std::size_t>(n), -1);
+  assign_huge(leaf_of_, static_cast<std::size_t>(n), std::int32_t{-1});
   if (order_.empty()) return;
   const int nodes = static_cast<int>(nodes_.size());
   auto set_trig = [](Cone& cone) {
@@ -262,14 +263,14 @@ void AabbTree::prepare_facing() {
   std::vector<int> leaves;
   for (int i = 0; i < nodes; ++i)
     if (nodes_[i].count > 0) leaves.push_back(i);
-  certificates_.resize(leaves.size());
+  resize_huge(certificates_, leaves.size());
   tbb::parallel_for(std::size_t{0}, leaves.size(), [&](std::size_t i) {
     const Node& node = nodes_[leaves[i]];
     certificates_[i] = leaf_certificate(leaves[i]);
     for (int s = node.first; s < node.first + node.count; ++s) leaf_of_[order_[s]] = static_cast<std::int32_t>(i);
   });
   // The side tests, from the cones, rounded outwards.
-  sides_.assign(nodes_.size(), SideTest{});
+  assign_huge(sides_, nodes_.size(), SideTest{});
   tbb::parallel_for(0, nodes, [&](int i) {
     const Cone& cone = cones_[i];
     SideTest& side = sides_[i];

@@ -9,6 +9,7 @@
 #include <array>
 #include <limits>
 
+#include "core/huge_pages.h"
 #include "metrics/aabb_tree.h"
 
 namespace lodkit::detail {
@@ -105,14 +106,15 @@ int split(std::vector<Entry>& entries, int begin, int end, int depth) {
 AabbTree::AabbTree(const Mesh& mesh, const Options& options) : mesh_(mesh) {
   const Index n = mesh.num_faces();
   if (n > kMostFaces) throw Error(fmt::format("{} faces: the closest-point search takes at most {}", n, kMostFaces));
-  order_.resize(static_cast<std::size_t>(n));
+  resize_huge(order_, static_cast<std::size_t>(n));
   auto centroid = [&](Index f) {
     return Eigen::Vector3d((mesh.positions.row(mesh.triangles(f, 0)) + mesh.positions.row(mesh.triangles(f, 1)) +
                             mesh.positions.row(mesh.triangles(f, 2))).transpose() / 3.0);
   };
   nodes_.emplace_back();
   if (options.surface_area_splits) {
-    std::vector<Boxed> boxed(static_cast<std::size_t>(n));
+    std::vector<Boxed> boxed;
+    resize_huge(boxed, static_cast<std::size_t>(n));
     tbb::parallel_for(Index{0}, n, [&](Index f) {
       const Eigen::Vector3d a = mesh.positions.row(mesh.triangles(f, 0)), b = mesh.positions.row(mesh.triangles(f, 1)),
                             c = mesh.positions.row(mesh.triangles(f, 2));
@@ -121,15 +123,16 @@ AabbTree::AabbTree(const Mesh& mesh, const Options& options) : mesh_(mesh) {
     });
     build_tree(boxed);
   } else {
-    std::vector<Centred> centred(static_cast<std::size_t>(n));
+    std::vector<Centred> centred;
+    resize_huge(centred, static_cast<std::size_t>(n));
     tbb::parallel_for(Index{0}, n, [&](Index f) { centred[f] = {centroid(f).cast<float>(), f}; });
     build_tree(centred);
   }
   if (n > 0 && nodes_[0].count == 0) {
-    quads_.reserve(nodes_.size() / 3 + 1);
+    reserve_huge(quads_, nodes_.size() / 3 + 1);
     build_quad(0);
   }
-  if (options.copy_corners) corners_.resize(static_cast<std::size_t>(n));
+  if (options.copy_corners) resize_huge(corners_, static_cast<std::size_t>(n));
   read_positions();
 }
 
@@ -195,7 +198,7 @@ void AabbTree::build_tree(std::vector<Entry>& entries) {
     self(self, *part.child[0], part.pair), self(self, *part.child[1], part.pair + 1);
   };
   place(place, *top, 0);
-  nodes_.assign(static_cast<std::size_t>(total), Node{});
+  assign_huge(nodes_, static_cast<std::size_t>(total), Node{});
   tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t i) {
     Part& part = *parts[i];
     if (sized) {

@@ -4,6 +4,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/huge_pages.h"
 #include "simplify/collapse_engine.h"
 
 namespace lodkit::detail {
@@ -84,7 +85,7 @@ void Engine::push_edges(Lane& lane, const std::vector<std::pair<Index, Index>>& 
 
 void Engine::rate_edges(const std::vector<std::pair<Index, Index>>& edges, Index region, std::vector<HeapEntry>& out,
                         Candidate* candidates) {
-  out.resize(edges.size());
+  resize_huge(out, edges.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), cost_->costly() ? 1 : 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       auto& probes = probes_.local();

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include "core/huge_pages.h"
 #include "simplify/collapse_engine.h"
 
 namespace lodkit::detail {
@@ -123,7 +124,7 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
     for (const HeapEntry& e : queued)
       if (const Index i = lane_of(e); i >= 0) ++sizes[i];
     std::vector<std::vector<HeapEntry>> split(lanes.size());
-    for (std::size_t i = 0; i < lanes.size(); ++i) split[i].reserve(sizes[i]);  // exact: no spare half
+    for (std::size_t i = 0; i < lanes.size(); ++i) reserve_huge(split[i], sizes[i]);  // exact: no spare half
     for (const HeapEntry& e : queued)
       if (const Index i = lane_of(e); i >= 0) split[i].push_back(e);
     queued = {};
@@ -178,7 +179,7 @@ std::vector<HeapEntry> Engine::lane_pass(Slabs slabs, Index stop_at, std::vector
   std::vector<HeapEntry> entries = rate_all(edges);
   std::size_t total_entries = entries.size();
   for (const Lane& lane : lanes) total_entries += lane.queue.size();
-  entries.reserve(total_entries);
+  reserve_huge(entries, total_entries);
   for (Lane& lane : lanes) {
     const std::vector<HeapEntry> left = lane.queue.take();
     std::copy_if(left.begin(), left.end(), std::back_inserter(entries), [&](const HeapEntry& e) { return !stale(e); });
@@ -294,7 +295,7 @@ SimplifyResult Engine::run(Index target) {
 
   // Every edge once, scored in both directions; on a large mesh the lanes do most of the work first.
   std::vector<std::pair<Index, Index>> edges;
-  edges.reserve(edges_.size());
+  reserve_huge(edges, edges_.size());
   for (const EdgeUse& e : edges_)
     if (e.faces <= 2) edges.push_back({e.lo, e.hi});
   edges_ = {};

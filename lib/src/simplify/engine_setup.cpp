@@ -7,6 +7,7 @@
 #include <tbb/task_group.h>
 
 #include "core/geometry.h"
+#include "core/huge_pages.h"
 #include "core/topology.h"
 #include "simplify/collapse_engine.h"
 
@@ -23,9 +24,9 @@ Engine::Engine(const Mesh& mesh, const SimplifyOptions& options) : o_(options) {
       // facing_against() only, which mostly settles without a search: quick to build, and lean.
       input_tree_ = std::make_unique<AabbTree>(mesh, AabbTree::Options{.copy_corners = false, .surface_area_splits = false});
       input_tree_->prepare_facing();
-      nearest_input_.resize(static_cast<std::size_t>(mesh.num_faces()));
+      resize_huge(nearest_input_, static_cast<std::size_t>(mesh.num_faces()));
       tbb::parallel_for(Index{0}, mesh.num_faces(), [&](Index f) { nearest_input_[f] = {input_tree_->certificate(f), f}; });
-      against_in_input_.assign(static_cast<std::size_t>(mesh.num_faces()), kUnknown);
+      assign_huge(against_in_input_, static_cast<std::size_t>(mesh.num_faces()), std::int8_t{kUnknown});
     });
   setup(mesh);
   setup_attributes(mesh);
@@ -47,8 +48,10 @@ void Engine::setup(const Mesh& mesh) {
   s_.origin = local_origin(bounding_box(mesh));
   // Points: one per distinct position.
   const Eigen::VectorX<Index> cls = position_classes(mesh);
-  s_.point_of.assign(static_cast<std::size_t>(nv), -1);
-  std::vector<Index> point_of_class(static_cast<std::size_t>(nv), -1);
+  assign_huge(s_.point_of, static_cast<std::size_t>(nv), Index{-1});
+  std::vector<Index> point_of_class;
+  assign_huge(point_of_class, static_cast<std::size_t>(nv), Index{-1});
+  reserve_huge(s_.position, static_cast<std::size_t>(nv));
   Index points = 0;
   for (Index v = 0; v < nv; ++v) {
     Index& p = point_of_class[cls[v]];
@@ -58,18 +61,19 @@ void Engine::setup(const Mesh& mesh) {
     }
     s_.point_of[v] = p;
   }
-  s_.quadric.assign(static_cast<std::size_t>(points), {});
-  s_.flags.assign(static_cast<std::size_t>(points), 0);
-  s_.point_faces.assign(static_cast<std::size_t>(points), {});
-  version_.assign(static_cast<std::size_t>(points), 0);
-  dirty_.assign(static_cast<std::size_t>(points), 0);
+  assign_huge(s_.quadric, static_cast<std::size_t>(points), Quadric{});
+  assign_huge(s_.flags, static_cast<std::size_t>(points), std::uint8_t{0});
+  resize_huge(s_.point_faces, static_cast<std::size_t>(points));
+  assign_huge(version_, static_cast<std::size_t>(points), std::uint32_t{0});
+  assign_huge(dirty_, static_cast<std::size_t>(points), std::uint32_t{0});
 
   // Faces on canonical wedges (identical vertices merged, so an unwelded soup is not all seams); a
   // face whose corners are not three distinct points cannot take part and is dropped.
   canonical_ = identical_vertex_classes(mesh);
   const std::vector<Index>& canonical = canonical_;
   const auto faces = static_cast<std::size_t>(mesh.num_faces());
-  s_.face.reserve(faces), s_.face_point.reserve(faces), s_.face_normal0.reserve(faces), s_.face_dead.reserve(faces);
+  reserve_huge(s_.face, faces), reserve_huge(s_.face_point, faces), reserve_huge(s_.face_normal0, faces);
+  reserve_huge(s_.face_dead, faces);
   {
     // Each point's face list sized once (growing half a million lists one face at a time showed in
     // the profile); a collapse appends at most a few more.
@@ -111,7 +115,8 @@ void Engine::setup(const Mesh& mesh) {
 
   // Boundaries and non-manifold parts.
   edges_ = classify_edges(point_faces);
-  std::vector<char> border_side(3 * faces, 0);  // per face side: on the boundary
+  std::vector<char> border_side;  // per face side: on the boundary
+  assign_huge(border_side, 3 * faces, char{0});
   for (const EdgeUse& e : edges_) {
     if (e.faces == 1) {
       s_.flags[e.lo] |= kBorder, s_.flags[e.hi] |= kBorder;
@@ -167,7 +172,8 @@ void Engine::setup(const Mesh& mesh) {
 }
 
 std::vector<Index> Engine::faces_across(const std::vector<Index>& face_id, bool consistent_only) const {
-  std::vector<Index> across(3 * s_.face.size(), -1);
+  std::vector<Index> across;
+  assign_huge(across, 3 * s_.face.size(), Index{-1});
   for (const EdgeUse& e : edges_) {
     if (e.faces != 2 || (consistent_only && !e.consistent)) continue;
     const Index f0 = input_face(face_id, e.face[0]), f1 = input_face(face_id, e.face[1]);

@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/huge_pages.h"
+
 namespace lodkit::detail {
 
 template <typename T, typename Less>
@@ -17,6 +19,8 @@ class QuadHeap {
 
   void push(const T& item) {
     std::size_t i = items_.size();
+    // Grown as push_back would, into storage advised for huge pages: a lane's heap doubles to megabytes.
+    if (i == items_.capacity()) reserve_huge(items_, std::max<std::size_t>(16, 2 * i));
     items_.push_back(item);
     while (i > 0) {
       const std::size_t parent = (i - 1) / 4;
