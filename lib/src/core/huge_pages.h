@@ -4,7 +4,7 @@
 // A 1M-face run touches about 400 MiB of fresh memory. With 4 KiB pages that is over 100,000 page
 // faults, and on a virtual machine each costs microseconds: a quarter of the run's wall time on the CI
 // machines, where transparent huge pages are given only to memory that asks (THP mode "madvise").
-// Asking for them on the few arrays that are megabytes long cuts the faults 512-fold and the TLB misses
+// Asking for them on the arrays of 2 MiB or more cuts their faults 512-fold, and the TLB misses
 // with them (docs/benchmarks-log.md, session 60). Allocation itself is unchanged: std::vector and
 // Eigen's storage as ever, advised before their first touch.
 #include <cstddef>
