@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/geometry.h"
+#include "core/huge_pages.h"
 #include "core/interpolate.h"
 #include "core/uv_charts.h"
 #include "metrics/aabb_tree.h"
@@ -70,13 +71,16 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 void sample_vertices_and_edges(const Mesh& m, SampleSet& out) {
   const Index nv = m.num_vertices(), nf = m.num_faces();
   std::vector<std::uint32_t>& vertex_point = out.vertex_point;
-  vertex_point.assign(static_cast<std::size_t>(nv), kNone);
+  detail::assign_huge(vertex_point, static_cast<std::size_t>(nv), kNone);
   // Edges grouped by their lower vertex: slots [first[lo], first[lo + 1]), filled[lo] of them in use.
-  std::vector<std::uint32_t> first(static_cast<std::size_t>(nv) + 1, 0), filled(static_cast<std::size_t>(nv), 0);
+  std::vector<std::uint32_t> first, filled;
+  detail::assign_huge(first, static_cast<std::size_t>(nv) + 1, std::uint32_t{0});
+  detail::assign_huge(filled, static_cast<std::size_t>(nv), std::uint32_t{0});
   for (Index f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) ++first[std::min(m.triangles(f, k), m.triangles(f, (k + 1) % 3)) + 1];
   for (Index v = 0; v < nv; ++v) first[v + 1] += first[v];
-  std::vector<std::pair<Index, std::uint32_t>> edge_point(first.back());  // (upper vertex, point)
+  std::vector<std::pair<Index, std::uint32_t>> edge_point;  // (upper vertex, point)
+  detail::resize_huge(edge_point, first.back());
   for (Index f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
       const Index a = m.triangles(f, k), b = m.triangles(f, (k + 1) % 3);
@@ -103,21 +107,23 @@ SampleSet sample_surface(const Mesh& m, long long face_samples) {
   const Index nf = m.num_faces();
   if (6 * static_cast<long long>(nf) + std::max<long long>(face_samples, nf) >= std::numeric_limits<std::uint32_t>::max())
     throw Error(fmt::format("compare: too many samples ({} faces, {} face samples)", nf, face_samples));
-  std::vector<double> area(static_cast<std::size_t>(nf));
+  std::vector<double> area;
+  detail::resize_huge(area, static_cast<std::size_t>(nf));
   double total = 0;
   for (Index f = 0; f < nf; ++f) {
     area[f] = 0.5 * (corner(m, f, 1) - corner(m, f, 0)).cross(corner(m, f, 2) - corner(m, f, 0)).norm();
     total += area[f];
   }
   SampleSet out;
-  out.samples.reserve(static_cast<std::size_t>(face_samples + 7 * nf));
-  out.points.reserve(static_cast<std::size_t>(face_samples + 3 * nf));
+  detail::reserve_huge(out.samples, static_cast<std::size_t>(face_samples + 7 * nf));
+  detail::reserve_huge(out.points, static_cast<std::size_t>(face_samples + 3 * nf));
   // Vertices and edge points: where maxima of piecewise-linear distances often sit.
   sample_vertices_and_edges(m, out);
   out.first_face_point = out.points.size();
   // Face interiors, allotted by area with a running remainder so the total is exact, each face's
   // after the faces before it; then placed side by side.
-  std::vector<std::size_t> first(static_cast<std::size_t>(nf) + 1, 0);
+  std::vector<std::size_t> first;
+  detail::assign_huge(first, static_cast<std::size_t>(nf) + 1, std::size_t{0});
   double carry = 0;
   for (Index f = 0; f < nf; ++f) {
     const double share = total > 0 ? face_samples * area[f] / total : double(face_samples) / nf;
@@ -159,7 +165,8 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 std::vector<Eigen::Vector3d> face_normals(const Mesh& m) {
-  std::vector<Eigen::Vector3d> normals(static_cast<std::size_t>(m.num_faces()));
+  std::vector<Eigen::Vector3d> normals;
+  detail::resize_huge(normals, static_cast<std::size_t>(m.num_faces()));
   tbb::parallel_for(Index{0}, m.num_faces(), [&](Index f) { normals[f] = face_normal(m, f); });
   return normals;
 }
@@ -167,7 +174,8 @@ std::vector<Eigen::Vector3d> face_normals(const Mesh& m) {
 // Each distinct point's distance to `to`, and at face samples (the only ones whose normals are compared)
 // the angle between its face's normal and the normal of the face it is closest to.
 std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh& to, const detail::AabbTree& tree) {
-  std::vector<Measured> result(set.points.size());
+  std::vector<Measured> result;
+  detail::resize_huge(result, set.points.size());
   const std::vector<Eigen::Vector3d> from_normals = face_normals(from), to_normals = face_normals(to);
   const bool colours = from.has_colours() && to.has_colours();
   const bool normals = from.has_normals() && to.has_normals();
@@ -270,7 +278,8 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
   d.samples = static_cast<long long>(sampled.samples.size());
 
   // The maximum, bracketed: the samples' largest distance (vertices included) is only a lower bound of it.
-  std::vector<Index> corner_face(sampled.vertex_point.size(), -1);
+  std::vector<Index> corner_face;
+  detail::assign_huge(corner_face, sampled.vertex_point.size(), Index{-1});
   for (std::size_t v = 0; v < sampled.vertex_point.size(); ++v)
     if (const std::uint32_t p = sampled.vertex_point[v]; p != kNone) corner_face[v] = measured[p].nearest;
   const detail::MaxDistanceBound bound = detail::bound_max_distance(

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/geometry.h"
+#include "core/huge_pages.h"
 #include "core/topology.h"
 
 namespace lodkit {
@@ -161,7 +162,7 @@ ProgressiveMesh build_progressive_mesh(const Mesh& input, const ProgressiveOptio
   for (Index i = 0; i < pm.base_wedges; ++i)
     std::copy_n(value.data() + dims * pm.wedge_input[i], dims, pm.wedge_attributes.data() + dims * i);
 
-  pm.splits.resize(nc);
+  detail::resize_huge(pm.splits, nc);
   Index next_wedge = pm.base_wedges;
   for (std::size_t j = 0; j < nc; ++j) {
     const std::size_t c = nc - 1 - j;

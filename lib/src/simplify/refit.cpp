@@ -44,6 +44,7 @@
 #include <unordered_map>
 
 #include "core/geometry.h"
+#include "core/huge_pages.h"
 #include "simplify/refit_input.h"
 #include "simplify/target.h"
 
@@ -120,8 +121,8 @@ class Refitter {
     const int n = std::clamp(static_cast<int>(std::ceil(std::sqrt(ratio))), 2, 12);
     for (int i = 0; i <= n; ++i)
       for (int j = 0; i + j <= n; ++j) grid_.push_back(Vec(i, j, n - i - j) / n);
-    input_pulls_.resize(input_samples_.size());
-    output_pulls_.resize(static_cast<std::size_t>(output.num_faces()) * grid_.size());
+    detail::resize_huge(input_pulls_, input_samples_.size());
+    detail::resize_huge(output_pulls_, static_cast<std::size_t>(output.num_faces()) * grid_.size());
     face_hint_.assign(static_cast<std::size_t>(output.num_faces()), -1);
   }
 
@@ -618,17 +619,18 @@ RefitInput::RefitInput(const Mesh& input, bool facing) : mesh(input), tree(input
   const Eigen::VectorX<Index> cls = position_classes(input);
   std::vector<char> used(static_cast<std::size_t>(input.num_vertices()), 0);
   std::vector<std::uint64_t> edges;
-  edges.reserve(3 * static_cast<std::size_t>(input.num_faces()));
+  reserve_huge(edges, 3 * static_cast<std::size_t>(input.num_faces()));
   for (Index f = 0; f < input.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) {
       const Index a = cls[input.triangles(f, k)], b = cls[input.triangles(f, (k + 1) % 3)];
       used[a] = 1;
       if (a != b) edges.push_back(edge_key(a, b));
     }
-  for (Index v = 0; v < input.num_vertices(); ++v)
-    if (used[v]) samples.push_back(input.positions.row(v).transpose());
   tbb::parallel_sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  reserve_huge(samples, static_cast<std::size_t>(std::count(used.begin(), used.end(), 1)) + edges.size());
+  for (Index v = 0; v < input.num_vertices(); ++v)
+    if (used[v]) samples.push_back(input.positions.row(v).transpose());
   for (const std::uint64_t e : edges)
     samples.push_back(0.5 * (input.positions.row(static_cast<Index>(e >> 32)) +
                              input.positions.row(static_cast<Index>(e & 0xffffffffu))).transpose());
