@@ -82,6 +82,7 @@ TEST(HugePages, TheKernelMarksTheAdvisedRange) {
   std::getline(mode, modes);
   if (modes.find("[madvise]") == std::string::npos && modes.find("[always]") == std::string::npos)
     GTEST_SKIP() << "transparent huge pages are off here: " << modes;
+  if (!std::ifstream("/proc/self/smaps")) GTEST_SKIP() << "no /proc/self/smaps to read the mappings from";
   std::vector<std::uint8_t> v;
   resize_huge(v, 16 * kMiB);
   // The first whole 2 MiB page inside the array lies in a mapping flagged "hg" (MADV_HUGEPAGE).
