@@ -47,6 +47,8 @@ TEST(HugePages, AssignAndResizeMatchThePlainCalls) {
     std::vector<double> grown{0.5, 1.5}, plain_grown = grown;
     resize_huge(grown, n), plain_grown.resize(n);
     EXPECT_EQ(grown, plain_grown) << n;
+    EXPECT_EQ(huge_vector<int>(n, -1), std::vector<int>(n, -1)) << n;
+    EXPECT_EQ(huge_vector<double>(n), std::vector<double>(n)) << n;
   }
 }
 

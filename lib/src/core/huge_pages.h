@@ -52,11 +52,27 @@ void assign_huge(std::vector<T, A>& v, std::size_t n, const T& value) {
   v.assign(n, value);
 }
 
+/// n copies of value in storage advised for huge pages.
+template <typename T>
+std::vector<T> huge_vector(std::size_t n, const T& value) {
+  std::vector<T> v;
+  assign_huge(v, n, value);
+  return v;
+}
+
 /// v.resize(n) into storage advised for huge pages (new elements value-initialised).
 template <typename T, typename A>
 void resize_huge(std::vector<T, A>& v, std::size_t n) {
   reserve_huge(v, n);
   v.resize(n);
+}
+
+/// n value-initialised elements in storage advised for huge pages.
+template <typename T>
+std::vector<T> huge_vector(std::size_t n) {
+  std::vector<T> v;
+  resize_huge(v, n);
+  return v;
 }
 
 }  // namespace lodkit::detail

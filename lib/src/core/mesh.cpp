@@ -75,8 +75,7 @@ Eigen::VectorX<Index> position_classes(const Mesh& mesh) {
   // node-based map allocated per vertex (a sixth of a 1M-face simplification's setup).
   std::size_t capacity = 16;
   while (capacity < 2 * static_cast<std::size_t>(n)) capacity *= 2;
-  std::vector<Index> slot;
-  detail::assign_huge(slot, capacity, Index{-1});
+  auto slot = detail::huge_vector<Index>(capacity, -1);
   auto key_of = [&](Index v) {
     const auto p = mesh.positions.row(v);
     return detail::position_key(p[0], p[1], p[2]);
@@ -124,8 +123,7 @@ std::vector<Index> identical_vertex_classes(const Mesh& mesh) {
   };
   const auto width = [](const auto& m) { return m.rows() ? static_cast<std::size_t>(m.cols()) : 0u; };
   const std::size_t k = 3 + width(a.normals) + width(a.uvs) + width(a.colours);
-  std::vector<std::uint64_t> records;
-  detail::resize_huge(records, k * static_cast<std::size_t>(n));
+  auto records = detail::huge_vector<std::uint64_t>(k * static_cast<std::size_t>(n));
   for (Index v = 0; v < n; ++v) {
     std::uint64_t* r = &records[k * static_cast<std::size_t>(v)];
     for (int d = 0; d < 3; ++d) *r++ = key(mesh.positions(v, d));
@@ -139,10 +137,8 @@ std::vector<Index> identical_vertex_classes(const Mesh& mesh) {
   // records was the largest step of a 1M-face simplification's setup.
   std::size_t capacity = 16;
   while (capacity < 2 * static_cast<std::size_t>(n)) capacity *= 2;
-  std::vector<Index> slot;
-  detail::assign_huge(slot, capacity, Index{-1});
-  std::vector<Index> representative;
-  detail::resize_huge(representative, static_cast<std::size_t>(n));
+  auto slot = detail::huge_vector<Index>(capacity, -1);
+  auto representative = detail::huge_vector<Index>(static_cast<std::size_t>(n));
   for (Index v = 0; v < n; ++v) {
     std::uint64_t h = 0;
     for (auto r = row(v); r != row(v) + k; ++r) h = detail::mix64(h ^ *r);

@@ -14,8 +14,7 @@ std::vector<EdgeUse> classify_edges(const std::vector<std::array<Index, 3>>& fac
   // other end: linear, where one sort of all 3F half-edges was a fifth of a 1M-face simplify's setup.
   Index points = 0;
   for (const auto& f : faces) points = std::max({points, f[0] + 1, f[1] + 1, f[2] + 1});
-  std::vector<Index> start;
-  assign_huge(start, static_cast<std::size_t>(points) + 1, Index{0});
+  auto start = huge_vector<Index>(static_cast<std::size_t>(points) + 1);
   for (const auto& f : faces)
     for (int k = 0; k < 3; ++k) ++start[std::min(f[k], f[(k + 1) % 3]) + 1];
   for (Index v = 0; v < points; ++v) start[v + 1] += start[v];
@@ -24,8 +23,7 @@ std::vector<EdgeUse> classify_edges(const std::vector<std::array<Index, 3>>& fac
     std::uint32_t face : 31;  // Index is 31 bits of non-negative values
     std::uint32_t forward : 1;  // runs lo -> hi
   };
-  std::vector<HalfEdge> half;
-  resize_huge(half, static_cast<std::size_t>(start.back()));
+  auto half = huge_vector<HalfEdge>(static_cast<std::size_t>(start.back()));
   std::vector<Index> fill;
   reserve_huge(fill, start.size() - 1);
   fill.assign(start.begin(), start.end() - 1);
@@ -56,13 +54,11 @@ std::vector<EdgeUse> classify_edges(const std::vector<std::array<Index, 3>>& fac
 std::vector<char> non_manifold_fans(Index num_points, const std::vector<std::array<Index, 3>>& faces) {
   // Link each point's neighbours through its faces (a face joins its two other corners); a manifold
   // point's neighbours form one connected piece.
-  std::vector<Index> start;
-  assign_huge(start, static_cast<std::size_t>(num_points) + 1, Index{0});
+  auto start = huge_vector<Index>(static_cast<std::size_t>(num_points) + 1);
   for (const auto& f : faces)
     for (Index v : f) ++start[v + 1];
   for (Index v = 0; v < num_points; ++v) start[v + 1] += start[v];
-  std::vector<std::pair<Index, Index>> links;
-  resize_huge(links, static_cast<std::size_t>(start.back()));
+  auto links = huge_vector<std::pair<Index, Index>>(static_cast<std::size_t>(start.back()));
   std::vector<Index> fill;
   reserve_huge(fill, start.size() - 1);
   fill.assign(start.begin(), start.end() - 1);
@@ -70,8 +66,7 @@ std::vector<char> non_manifold_fans(Index num_points, const std::vector<std::arr
     for (int k = 0; k < 3; ++k) links[fill[f[k]]++] = {f[(k + 1) % 3], f[(k + 2) % 3]};
 
   // Points are independent: in chunks side by side (a tenth of a 1M-face simplification's setup).
-  std::vector<char> bad;
-  assign_huge(bad, static_cast<std::size_t>(num_points), char{0});
+  auto bad = huge_vector<char>(static_cast<std::size_t>(num_points));
   tbb::parallel_for(tbb::blocked_range<Index>(0, num_points, 4096), [&](const tbb::blocked_range<Index>& range) {
     std::vector<Index> local;
     UnionFind uf;

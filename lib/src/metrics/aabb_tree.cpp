@@ -13,8 +13,8 @@
 #endif
 #include <tbb/parallel_for.h>
 
-#include "core/huge_pages.h"
 #include "core/geometry.h"
+#include "core/huge_pages.h"
 
 namespace lodkit::detail {
 

@@ -113,8 +113,7 @@ AabbTree::AabbTree(const Mesh& mesh, const Options& options) : mesh_(mesh) {
   };
   nodes_.emplace_back();
   if (options.surface_area_splits) {
-    std::vector<Boxed> boxed;
-    resize_huge(boxed, static_cast<std::size_t>(n));
+    auto boxed = huge_vector<Boxed>(static_cast<std::size_t>(n));
     tbb::parallel_for(Index{0}, n, [&](Index f) {
       const Eigen::Vector3d a = mesh.positions.row(mesh.triangles(f, 0)), b = mesh.positions.row(mesh.triangles(f, 1)),
                             c = mesh.positions.row(mesh.triangles(f, 2));
@@ -123,8 +122,7 @@ AabbTree::AabbTree(const Mesh& mesh, const Options& options) : mesh_(mesh) {
     });
     build_tree(boxed);
   } else {
-    std::vector<Centred> centred;
-    resize_huge(centred, static_cast<std::size_t>(n));
+    auto centred = huge_vector<Centred>(static_cast<std::size_t>(n));
     tbb::parallel_for(Index{0}, n, [&](Index f) { centred[f] = {centroid(f).cast<float>(), f}; });
     build_tree(centred);
   }

@@ -79,8 +79,7 @@ void sample_vertices_and_edges(const Mesh& m, SampleSet& out) {
   for (Index f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) ++first[std::min(m.triangles(f, k), m.triangles(f, (k + 1) % 3)) + 1];
   for (Index v = 0; v < nv; ++v) first[v + 1] += first[v];
-  std::vector<std::pair<Index, std::uint32_t>> edge_point;  // (upper vertex, point)
-  detail::resize_huge(edge_point, first.back());
+  auto edge_point = detail::huge_vector<std::pair<Index, std::uint32_t>>(first.back());  // (upper vertex, point)
   for (Index f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
       const Index a = m.triangles(f, k), b = m.triangles(f, (k + 1) % 3);
@@ -107,8 +106,7 @@ SampleSet sample_surface(const Mesh& m, long long face_samples) {
   const Index nf = m.num_faces();
   if (6 * static_cast<long long>(nf) + std::max<long long>(face_samples, nf) >= std::numeric_limits<std::uint32_t>::max())
     throw Error(fmt::format("compare: too many samples ({} faces, {} face samples)", nf, face_samples));
-  std::vector<double> area;
-  detail::resize_huge(area, static_cast<std::size_t>(nf));
+  auto area = detail::huge_vector<double>(static_cast<std::size_t>(nf));
   double total = 0;
   for (Index f = 0; f < nf; ++f) {
     area[f] = 0.5 * (corner(m, f, 1) - corner(m, f, 0)).cross(corner(m, f, 2) - corner(m, f, 0)).norm();
@@ -122,8 +120,7 @@ SampleSet sample_surface(const Mesh& m, long long face_samples) {
   out.first_face_point = out.points.size();
   // Face interiors, allotted by area with a running remainder so the total is exact, each face's
   // after the faces before it; then placed side by side.
-  std::vector<std::size_t> first;
-  detail::assign_huge(first, static_cast<std::size_t>(nf) + 1, std::size_t{0});
+  auto first = detail::huge_vector<std::size_t>(static_cast<std::size_t>(nf) + 1);
   double carry = 0;
   for (Index f = 0; f < nf; ++f) {
     const double share = total > 0 ? face_samples * area[f] / total : double(face_samples) / nf;
@@ -165,8 +162,7 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 std::vector<Eigen::Vector3d> face_normals(const Mesh& m) {
-  std::vector<Eigen::Vector3d> normals;
-  detail::resize_huge(normals, static_cast<std::size_t>(m.num_faces()));
+  auto normals = detail::huge_vector<Eigen::Vector3d>(static_cast<std::size_t>(m.num_faces()));
   tbb::parallel_for(Index{0}, m.num_faces(), [&](Index f) { normals[f] = face_normal(m, f); });
   return normals;
 }
@@ -174,8 +170,7 @@ std::vector<Eigen::Vector3d> face_normals(const Mesh& m) {
 // Each distinct point's distance to `to`, and at face samples (the only ones whose normals are compared)
 // the angle between its face's normal and the normal of the face it is closest to.
 std::vector<Measured> measure(const SampleSet& set, const Mesh& from, const Mesh& to, const detail::AabbTree& tree) {
-  std::vector<Measured> result;
-  detail::resize_huge(result, set.points.size());
+  auto result = detail::huge_vector<Measured>(set.points.size());
   const std::vector<Eigen::Vector3d> from_normals = face_normals(from), to_normals = face_normals(to);
   const bool colours = from.has_colours() && to.has_colours();
   const bool normals = from.has_normals() && to.has_normals();
@@ -278,8 +273,7 @@ DirectedDistance directed(const Mesh& from, const SampleSet& sampled, const Mesh
   d.samples = static_cast<long long>(sampled.samples.size());
 
   // The maximum, bracketed: the samples' largest distance (vertices included) is only a lower bound of it.
-  std::vector<Index> corner_face;
-  detail::assign_huge(corner_face, sampled.vertex_point.size(), Index{-1});
+  auto corner_face = detail::huge_vector<Index>(sampled.vertex_point.size(), -1);
   for (std::size_t v = 0; v < sampled.vertex_point.size(); ++v)
     if (const std::uint32_t p = sampled.vertex_point[v]; p != kNone) corner_face[v] = measured[p].nearest;
   const detail::MaxDistanceBound bound = detail::bound_max_distance(

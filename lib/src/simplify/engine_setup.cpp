@@ -49,8 +49,7 @@ void Engine::setup(const Mesh& mesh) {
   // Points: one per distinct position.
   const Eigen::VectorX<Index> cls = position_classes(mesh);
   assign_huge(s_.point_of, static_cast<std::size_t>(nv), Index{-1});
-  std::vector<Index> point_of_class;
-  assign_huge(point_of_class, static_cast<std::size_t>(nv), Index{-1});
+  auto point_of_class = huge_vector<Index>(static_cast<std::size_t>(nv), -1);
   reserve_huge(s_.position, static_cast<std::size_t>(nv));
   Index points = 0;
   for (Index v = 0; v < nv; ++v) {
@@ -115,8 +114,7 @@ void Engine::setup(const Mesh& mesh) {
 
   // Boundaries and non-manifold parts.
   edges_ = classify_edges(point_faces);
-  std::vector<char> border_side;  // per face side: on the boundary
-  assign_huge(border_side, 3 * faces, char{0});
+  auto border_side = huge_vector<char>(3 * faces);  // per face side: on the boundary
   for (const EdgeUse& e : edges_) {
     if (e.faces == 1) {
       s_.flags[e.lo] |= kBorder, s_.flags[e.hi] |= kBorder;
@@ -172,8 +170,7 @@ void Engine::setup(const Mesh& mesh) {
 }
 
 std::vector<Index> Engine::faces_across(const std::vector<Index>& face_id, bool consistent_only) const {
-  std::vector<Index> across;
-  assign_huge(across, 3 * s_.face.size(), Index{-1});
+  auto across = huge_vector<Index>(3 * s_.face.size(), -1);
   for (const EdgeUse& e : edges_) {
     if (e.faces != 2 || (consistent_only && !e.consistent)) continue;
     const Index f0 = input_face(face_id, e.face[0]), f1 = input_face(face_id, e.face[1]);
