@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <atomic>
 
-#include "core/huge_pages.h"
 #include "simplify/collapse_engine.h"
 
 namespace lodkit::detail {
@@ -12,8 +11,6 @@ void Engine::collapse(Lane& lane, Index u, Index v, const Candidate& c) {
   const Probe& probe = lane.probe;
   CollapseRecord* rec = nullptr;
   if (o_.record_collapses) {
-    // Every point but those of the base collapses once at most: one block, advised for huge pages.
-    if (records_.empty()) reserve_huge(records_, s_.position.size());
     records_.push_back({u, v, s_.position[v] + s_.origin, c.position + s_.origin, c.error, {}, {}, {}, {}, {}});
     rec = &records_.back();
     for (int i = 0; i < probe.wedge_map_size; ++i) rec->wedge_map.push_back({probe.wedge_map[i].first, probe.wedge_map[i].second});

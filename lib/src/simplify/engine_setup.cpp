@@ -65,6 +65,8 @@ void Engine::setup(const Mesh& mesh) {
   resize_huge(s_.point_faces, static_cast<std::size_t>(points));
   assign_huge(version_, static_cast<std::size_t>(points), std::uint32_t{0});
   assign_huge(dirty_, static_cast<std::size_t>(points), std::uint32_t{0});
+  // Every point collapses once at most: the records in one block, not doubled as they grow.
+  if (o_.record_collapses) reserve_huge(records_, static_cast<std::size_t>(points));
 
   // Faces on canonical wedges (identical vertices merged, so an unwelded soup is not all seams); a
   // face whose corners are not three distinct points cannot take part and is dropped.
